@@ -1,0 +1,138 @@
+// nnrun: runs one model of the engine on tensors from a safetensors file and writes
+// its outputs to another, as the PyTorch reference module would produce them.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "apps/common/cli.h"
+#include "apps/nnrun/runner.h"
+#include "nn/isa.h"
+#include "nn/threads.h"
+#include "weights/safetensors.h"
+
+namespace nnrun {
+
+const std::vector<ModelInfo>& models() {
+  static const std::vector<ModelInfo> list = {
+      {"convnext_tiny", "torchvision convnext_tiny().features: input [N,3,H,W] -> features [N,768,H/32,W/32]", make_convnext},
+      {"convnext_small", "torchvision convnext_small().features", make_convnext},
+      {"convnext_base", "torchvision convnext_base().features", make_convnext},
+      {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext},
+  };
+  return list;
+}
+
+}  // namespace nnrun
+
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string model, weights_path, input_path, output_path, isa_name;
+  int threads = 0, repeat = 0;
+  bool profile = false, quiet = false;
+
+  std::string model_list = "models:\n";
+  for (const auto& m : nnrun::models()) model_list += "  " + std::string(m.name) + "\n      " + m.help + "\n";
+  cli::Parser args("nnrun", "--model NAME --weights W.safetensors --input X.safetensors --output Y.safetensors [options]",
+                   "Runs a model of the engine on the tensors in X and writes its outputs to Y, exactly as\n"
+                   "the PyTorch reference module computes them (NCHW at the boundary).");
+  args.option("model", "NAME", "model to run (see the list below)", &model);
+  args.option("weights", "FILE", "weights as safetensors, PyTorch state_dict names", &weights_path);
+  args.option("input", "FILE", "input tensors as safetensors (e.g. 'input' [N,3,H,W] F32)", &input_path);
+  args.option("output", "FILE", "where to write the output tensors (safetensors)", &output_path);
+  args.option("threads", "N", "threads (default: all cores)", &threads);
+  args.option("repeat", "R", "run the forward pass R more times and print forward_ms min/median/max", &repeat);
+  args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
+  args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
+  args.flag("quiet", "print only errors and the timing line", &quiet);
+  for (const char* r : {"model", "weights", "input", "output"}) args.required(r);
+  args.epilog(model_list +
+              "\nexample:\n  nnrun --model convnext_tiny --weights convnext_tiny.safetensors \\\n"
+              "        --input x.safetensors --output y.safetensors --threads 2 --repeat 5");
+  args.parse(argc, argv);
+
+  const nnrun::ModelInfo* info = nullptr;
+  for (const auto& m : nnrun::models())
+    if (model == m.name) info = &m;
+  if (!info) args.fail("unknown model '" + model + "'");
+  if (repeat < 0) args.fail("--repeat must be >= 0");
+  if (threads < 0) args.fail("--threads must be >= 0");
+  if (!isa_name.empty()) {
+    nn::Isa isa;
+    if (!nn::parse_isa(isa_name.c_str(), &isa)) args.fail("--isa must be scalar, avx2 or avx512");
+    if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa()))
+      args.fail(std::string("--isa ") + isa_name + ": this CPU supports at most " + nn::isa_name(nn::detect_isa()));
+    nn::set_isa(isa);
+  }
+  nn::set_num_threads(threads);
+
+  try {
+    std::unique_ptr<nnrun::Runner> runner;
+    {
+      // The file's bytes are released once the model has repacked them.
+      weights::SafeTensors w = weights::SafeTensors::load(weights_path);
+      runner = info->make(model, w);
+      std::set<std::string> used;
+      for (const auto& n : runner->used_tensors()) used.insert(n);
+      std::vector<std::string> unused;
+      for (const auto& n : w.names())
+        if (!used.count(n)) unused.push_back(n);
+      if (!unused.empty()) {
+        std::string list;
+        for (std::size_t i = 0; i < unused.size() && i < 8; ++i) list += (i ? ", " : "") + unused[i];
+        if (unused.size() > 8) list += ", ...";
+        std::fprintf(stderr, "nnrun: warning: %s: %zu tensors not used by %s: %s\n", weights_path.c_str(),
+                     unused.size(), model.c_str(), list.c_str());
+      }
+    }
+    {
+      weights::SafeTensors x = weights::SafeTensors::load(input_path);
+      runner->prepare(x);
+    }
+    if (!quiet)
+      std::fprintf(stderr, "nnrun: %s: %s; kernels %s, %d threads\n", model.c_str(), runner->describe().c_str(),
+                   nn::isa_name(nn::active_isa()), nn::num_threads());
+
+    runner->forward();
+    weights::Writer out;
+    out.set_metadata("format", "roadnn-v1");
+    out.set_metadata("model", model);
+    runner->write_outputs(out);
+    out.write(output_path);
+
+    if (repeat > 0 || profile) {
+      runner->profiler().set_enabled(profile);
+      runner->profiler().reset_times();
+      std::vector<double> ms;
+      const int passes = std::max(repeat, 1);
+      for (int i = 0; i < passes; ++i) {
+        auto t0 = std::chrono::steady_clock::now();
+        runner->forward();
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      }
+      if (profile) std::fputs(runner->profiler().table().c_str(), stdout);
+      if (repeat > 0)
+        std::printf("forward_ms min=%.3f median=%.3f max=%.3f\n", *std::min_element(ms.begin(), ms.end()),
+                    median(ms), *std::max_element(ms.begin(), ms.end()));
+    }
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "nnrun: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "nnrun: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,162 @@
+// synth: seeded random weights and inputs, so the demo, benchmarks and users can
+// run every model without Python or a trained checkpoint. Weights follow the
+// tests' scales, which make every layer matter: conv/linear N(0, 1/fan_in),
+// layer scale U(0.3, 1), norm gamma N(1, 0.2), beta N(0, 0.1), biases N(0, 0.05).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/common/cli.h"
+#include "nn/models/convnext.h"
+#include "nn/models/stixel_head.h"
+#include "nn/models/synthetic_weights.h"
+#include "apps/common/image_io.h"
+#include "weights/safetensors.h"
+
+namespace {
+
+std::vector<weights::TensorSpec> model_specs(const std::string& model, nn::StixelHeadVariant head) {
+  if (model == "stixelnext") {
+    auto specs = nn::convnext_tensor_specs(nn::convnext_tiny_config(), "features.");
+    for (auto& s : nn::stixel_head_tensor_specs(head, 768, "classifier.")) specs.push_back(s);
+    return specs;
+  }
+  if (model == "convnext_tiny") return nn::convnext_tensor_specs(nn::convnext_tiny_config(), "features.");
+  if (model == "convnext_small") return nn::convnext_tensor_specs(nn::convnext_small_config(), "features.");
+  if (model == "convnext_base") return nn::convnext_tensor_specs(nn::convnext_base_config(), "features.");
+  return {};
+}
+
+// A plain road scene for demos: sky, horizon, road with lane marks, a few boxy
+// "vehicles" and posts, with mild texture so image codecs and the network see detail.
+std::vector<std::uint8_t> road_scene(int w, int h, nn::SplitMix64& rng) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(w) * h * 3);
+  const int horizon = h * 45 / 100;
+  struct Box { int x0, y0, x1, y1; std::uint8_t r, g, b; };
+  std::vector<Box> boxes;
+  for (int i = 0; i < 6; ++i) {
+    const double depth = 0.15 + 0.8 * rng.uniform();  // 0 near .. 1 far
+    const int bw = static_cast<int>(w * (0.25 - 0.2 * depth)), bh = static_cast<int>(bw * (0.6 + 0.3 * rng.uniform()));
+    const int bottom = horizon + static_cast<int>((h - horizon) * (1.0 - depth) * 0.9) + 4;
+    const int x0 = static_cast<int>((w - bw) * rng.uniform());
+    boxes.push_back({x0, bottom - bh, x0 + bw, bottom, static_cast<std::uint8_t>(40 + 200 * rng.uniform()),
+                     static_cast<std::uint8_t>(40 + 150 * rng.uniform()), static_cast<std::uint8_t>(40 + 200 * rng.uniform())});
+  }
+  std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) { return a.y1 < b.y1; });  // far first
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double r, g, b;
+      if (y < horizon) {  // sky
+        const double t = static_cast<double>(y) / horizon;
+        r = 110 + 80 * t, g = 160 + 60 * t, b = 230 + 20 * t;
+      } else {  // road between grass verges, lane marks converging to the centre
+        const double t = static_cast<double>(y - horizon) / (h - horizon);
+        const double half = w * (0.05 + 0.55 * t), cx = w * 0.5;
+        const bool road = std::fabs(x - cx) < half;
+        r = road ? 95 : 70, g = road ? 95 : 120, b = road ? 100 : 60;
+        const double lane = std::fabs(std::fabs(x - cx) - half * 0.33);
+        if (road && lane < 2 + 10 * t && static_cast<int>(t * 40) % 2 == 0) r = g = b = 230;
+      }
+      for (const Box& bx : boxes)
+        if (x >= bx.x0 && x < bx.x1 && y >= bx.y0 && y < bx.y1) {
+          const bool window = y < bx.y0 + (bx.y1 - bx.y0) / 3 && x > bx.x0 + (bx.x1 - bx.x0) / 8 && x < bx.x1 - (bx.x1 - bx.x0) / 8;
+          r = window ? 40 : bx.r, g = window ? 50 : bx.g, b = window ? 60 : bx.b;
+        }
+      const double noise = 12.0 * (rng.uniform() - 0.5);
+      std::uint8_t* p = &px[(static_cast<std::size_t>(y) * w + x) * 3];
+      p[0] = static_cast<std::uint8_t>(std::clamp(r + noise, 0.0, 255.0));
+      p[1] = static_cast<std::uint8_t>(std::clamp(g + noise, 0.0, 255.0));
+      p[2] = static_cast<std::uint8_t>(std::clamp(b + noise, 0.0, 255.0));
+    }
+  return px;
+}
+
+std::vector<std::int64_t> parse_shape(const std::string& text) {
+  std::vector<std::int64_t> shape;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, ',')) {
+    char* end = nullptr;
+    long long d = std::strtoll(part.c_str(), &end, 10);
+    if (part.empty() || *end || d < 1 || d > 100000) return {};
+    shape.push_back(d);
+  }
+  return shape;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string model, shape_text, out, range = "normal", head = "v4", image_size;
+  int seed = 1;
+  cli::Parser args("synth", "(--model NAME | --shape N,C,H,W) --out FILE.safetensors [--seed S] [--range normal|LO,HI]",
+                   "Writes seeded random weights for a model (PyTorch state_dict names), a random input\n"
+                   "tensor named 'input' (safetensors), or a synthetic road-scene PNG. Untrained: for demos,\n"
+                   "tests and benchmarks.");
+  args.option("model", "NAME", "weights for convnext_tiny, convnext_small, convnext_base or stixelnext", &model);
+  args.option("head", "V", "stixelnext head variant v0..v4 (default v4)", &head);
+  args.option("image", "WxH", "a synthetic road-scene PNG of this size instead", &image_size);
+  args.option("shape", "N,C,H,W", "an input tensor 'input' of this shape instead", &shape_text);
+  args.option("range", "R", "input values: 'normal' (N(0,1), default) or LO,HI uniform, e.g. 0,255", &range);
+  args.option("seed", "S", "random seed (default 1)", &seed);
+  args.option("out", "FILE", "output safetensors file", &out);
+  args.required("out");
+  args.epilog("examples:\n  synth --model convnext_tiny --out w.safetensors\n"
+              "  synth --model stixelnext --head v4 --out stixelnext.safetensors\n"
+              "  synth --image 1920x1280 --out road.png\n"
+              "  synth --shape 1,3,1280,1920 --range 0,255 --out x.safetensors");
+  args.parse(argc, argv);
+  if (model.empty() + shape_text.empty() + image_size.empty() != 2)
+    args.fail("give exactly one of --model, --shape and --image");
+  nn::StixelHeadVariant variant;
+  if (!nn::parse_stixel_head(head, &variant)) args.fail("--head must be one of v0..v4");
+
+  try {
+    nn::SplitMix64 rng(static_cast<std::uint64_t>(seed));
+    weights::Writer w;
+    if (!image_size.empty()) {
+      int iw = 0, ih = 0;
+      if (std::sscanf(image_size.c_str(), "%dx%d", &iw, &ih) != 2 || iw < 8 || ih < 8 || iw > 16384 || ih > 16384)
+        args.fail("--image takes WxH, e.g. 1920x1280");
+      auto px = road_scene(iw, ih, rng);
+      imageio::save_png(out, px.data(), iw, ih, 3);
+      return 0;
+    }
+    if (!model.empty()) {
+      auto specs = model_specs(model, variant);
+      if (specs.empty()) args.fail("unknown model '" + model + "'");
+      w = nn::synthetic_weights(specs, static_cast<std::uint64_t>(seed));
+      w.set_metadata("model", model);
+      if (model == "stixelnext") {
+        w.set_metadata("stixelnext.head", head);
+        w.set_metadata("stixelnext.anchors", "tangent:4,66,64");
+        w.set_metadata("stixelnext.normalization", "raw255");
+      }
+    } else {
+      w.set_metadata("format", "roadnn-v1");
+      w.set_metadata("generator", "synth seed " + std::to_string(seed) + " (random input)");
+      auto shape = parse_shape(shape_text);
+      if (shape.empty()) args.fail("--shape takes positive comma-separated sizes, e.g. 1,3,224,224");
+      double lo = 0, hi = 0;
+      const bool normal = range == "normal";
+      if (!normal && std::sscanf(range.c_str(), "%lf,%lf", &lo, &hi) != 2)
+        args.fail("--range takes 'normal' or LO,HI");
+      std::size_t n = 1;
+      for (auto d : shape) n *= static_cast<std::size_t>(d);
+      if (n > (std::size_t{1} << 31)) args.fail("--shape is too large");
+      std::vector<float> v(n);
+      for (auto& x : v) x = static_cast<float>(normal ? rng.normal() : lo + (hi - lo) * rng.uniform());
+      w.add_f32("input", shape, v.data());
+    }
+    w.write(out);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "synth: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

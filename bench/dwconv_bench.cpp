@@ -1,0 +1,77 @@
+// Depthwise convolution on the real models' layer shapes, per ISA and thread count:
+// ConvNeXt-Tiny's 7x7 stages at 1280x1920 input, MobileNetV3-Large's 3x3 / 5x5
+// layers at 720x1280. FLOPs count 2 per tap per output element (2*49 for 7x7).
+#include <benchmark/benchmark.h>
+
+#include <random>
+#include <vector>
+
+#include "bench/peak.h"
+#include "nn/dwconv.h"
+#include "nn/isa.h"
+#include "nn/threads.h"
+
+namespace {
+
+void BM_DwConv(benchmark::State& state) {
+  const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
+  const int c = static_cast<int>(state.range(2)), k = static_cast<int>(state.range(3));
+  const int stride = static_cast<int>(state.range(4));
+  const auto isa = static_cast<nn::Isa>(state.range(5));
+  const int threads = static_cast<int>(state.range(6));
+  if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa())) {
+    state.SkipWithError("ISA not supported by this CPU");
+    return;
+  }
+  nn::set_isa(isa);
+  nn::set_num_threads(threads);
+
+  nn::DwConvParams p;
+  p.kh = p.kw = k;
+  p.stride_h = p.stride_w = stride;
+  p.pad_h = p.pad_w = k / 2;
+  // ConvNeXt's depthwise conv has no activation; MobileNetV3's fuse one.
+  p.act = stride == 1 && k == 7 ? nn::Act::None : nn::Act::HardSwish;
+  const nn::Shape in{1, h, w, c};
+  const nn::Shape out = nn::dwconv_output_shape(in, p);
+  std::mt19937 gen(1);
+  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
+  std::vector<float> x(in.count()), wt(static_cast<std::size_t>(c) * k * k), b(c), y(out.count());
+  for (auto& v : x) v = dist(gen);
+  for (auto& v : wt) v = dist(gen);
+  for (auto& v : b) v = dist(gen);
+  const nn::DwConvWeights packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
+
+  nn::dwconv(nn::ConstTensorView(x.data(), in), packed, nn::TensorView{y.data(), out});
+  for (auto _ : state) {
+    nn::dwconv(nn::ConstTensorView(x.data(), in), packed, nn::TensorView{y.data(), out});
+    benchmark::ClobberMemory();
+  }
+  nnbench::set_flop_counters(state, 2.0 * k * k * static_cast<double>(out.count()), threads);
+  const double bytes = (static_cast<double>(in.count()) + out.count()) * sizeof(float);
+  state.counters["GB/s"] = benchmark::Counter(bytes * state.iterations() / 1e9, benchmark::Counter::kIsRate);
+  state.SetLabel(nn::isa_name(isa));
+  nn::set_num_threads(0);
+  nn::set_isa(nn::detect_isa());
+}
+
+void shapes(benchmark::internal::Benchmark* b) {
+  // {h, w, c, k, stride} of the input.
+  const int layers[][5] = {
+      {320, 480, 96, 7, 1},  {160, 240, 192, 7, 1}, {80, 120, 384, 7, 1}, {40, 60, 768, 7, 1},
+      {360, 640, 64, 3, 2},  {180, 320, 72, 3, 1},  {180, 320, 72, 5, 2}, {90, 160, 120, 5, 1},
+      {90, 160, 240, 3, 2},  {45, 80, 672, 5, 2},
+  };
+  for (const auto& l : layers)
+    for (int isa = 0; isa <= 2; ++isa)
+      for (int threads : {1, 2}) b->Args({l[0], l[1], l[2], l[3], l[4], isa, threads});
+}
+
+BENCHMARK(BM_DwConv)
+    ->ArgNames({"h", "w", "c", "k", "s", "isa", "threads"})
+    ->Apply(shapes)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(0.5);
+
+}  // namespace

@@ -1,0 +1,163 @@
+// Every distinct GEMM of ConvNeXt-Tiny at a 1280x1920 input, with its real epilogue, for
+// every micro-kernel of nn/gemm_kernels.h this CPU runs:
+//   gemm/<shape>/<kernel>/threads:T   gemm_parallel over all M rows (A, C in DRAM)
+//   gemm_tile64/<shape>/<kernel>/threads:T   gemm() on 64-row tiles whose A and C stay in
+//     cache, as the model's fused LN -> pw1 -> GELU -> pw2 loop calls it (T threads each
+//     run their own tiles)
+// pct_peak is relative to the FMA peak of the kernel's own ISA (bench/peak.h).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "bench/peak.h"
+#include "nn/buffer.h"
+#include "nn/gemm.h"
+#include "nn/gemm_kernels.h"
+#include "nn/threads.h"
+
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
+namespace {
+
+enum class Epi { Bias, BiasGelu, BiasScaleResidual };
+
+struct GemmShape {
+  const char* name;
+  int m, k, n;
+  Epi epi;
+};
+
+// M = output pixels; stem 4x4/4 conv and 2x2/2 downsampling convs as im2col GEMMs.
+const GemmShape kShapes[] = {
+    {"stem_k48_n96", 153600, 48, 96, Epi::Bias},
+    {"s1_pw1_k96_n384", 153600, 96, 384, Epi::BiasGelu},
+    {"s1_pw2_k384_n96", 153600, 384, 96, Epi::BiasScaleResidual},
+    {"ds1_k384_n192", 38400, 384, 192, Epi::Bias},
+    {"s2_pw1_k192_n768", 38400, 192, 768, Epi::BiasGelu},
+    {"s2_pw2_k768_n192", 38400, 768, 192, Epi::BiasScaleResidual},
+    {"ds2_k768_n384", 9600, 768, 384, Epi::Bias},
+    {"s3_pw1_k384_n1536", 9600, 384, 1536, Epi::BiasGelu},
+    {"s3_pw2_k1536_n384", 9600, 1536, 384, Epi::BiasScaleResidual},
+    {"ds3_k1536_n768", 2400, 1536, 768, Epi::Bias},
+    {"s4_pw1_k768_n3072", 2400, 768, 3072, Epi::BiasGelu},
+    {"s4_pw2_k3072_n768", 2400, 3072, 768, Epi::BiasScaleResidual},
+};
+
+constexpr int kTileRows = 64;
+constexpr int kTilesPerIteration = 16;
+
+// Deterministic, finite, not-denormal values in [-1, 1).
+void fill(float* p, std::size_t n, unsigned salt) {
+  unsigned s = 2463534242u ^ salt;
+  for (std::size_t i = 0; i < n; ++i) {
+    s ^= s << 13;
+    s ^= s >> 17;
+    s ^= s << 5;
+    p[i] = static_cast<float>(s >> 8) * (2.0f / 16777216.0f) - 1.0f;
+  }
+}
+
+struct Problem {
+  nn::GemmWeights w;
+  nn::AlignedBuffer bias, scale;
+  Problem(const GemmShape& s, int ukernel) : bias(s.n), scale(s.n) {
+    nn::AlignedBuffer wt(static_cast<std::size_t>(s.n) * s.k);
+    fill(wt.data(), wt.size(), 1);
+    // ~unit-variance sums, so GELU sees its whole interesting range.
+    for (std::size_t i = 0; i < wt.size(); ++i) wt[i] *= 1.7f / std::sqrt(static_cast<float>(s.k));
+    w = nn::GemmWeights::pack_for_ukernel(wt.data(), s.n, s.k, ukernel);
+    fill(bias.data(), bias.size(), 2);
+    fill(scale.data(), scale.size(), 3);
+    for (std::size_t i = 0; i < scale.size(); ++i) scale[i] *= 1e-3f;  // layer scale ~ 1e-6..1
+  }
+  nn::GemmEpilogue epilogue(const GemmShape& s, float* c, std::ptrdiff_t ldc) const {
+    nn::GemmEpilogue ep;
+    ep.bias = bias.data();
+    if (s.epi == Epi::BiasGelu) ep.act = nn::Act::Gelu;
+    if (s.epi == Epi::BiasScaleResidual) {
+      ep.scale = scale.data();
+      ep.residual = c;  // the block's input, updated in place as in the model
+      ep.ldr = ldc;
+    }
+    return ep;
+  }
+};
+
+// pct_peak refers to the kernel's ISA: the peak loop follows the active ISA.
+class IsaOverride {
+ public:
+  explicit IsaOverride(nn::Isa isa) : saved_(nn::active_isa()) { nn::set_isa(isa); }
+  ~IsaOverride() { nn::set_isa(saved_); }
+ private:
+  nn::Isa saved_;
+};
+
+void bm_full(benchmark::State& state, GemmShape s, int ukernel, int threads) {
+  IsaOverride isa(nn::gemm_ukernel(ukernel).isa);
+  const Problem p(s, ukernel);
+  nn::AlignedBuffer a(static_cast<std::size_t>(s.m) * s.k), c(static_cast<std::size_t>(s.m) * s.n);
+  fill(a.data(), a.size(), 4);
+  fill(c.data(), c.size(), 5);
+  const int saved = nn::num_threads();
+  nn::set_num_threads(threads);
+  const nn::GemmEpilogue ep = p.epilogue(s, c.data(), s.n);
+  for (auto _ : state) {
+    nn::gemm_parallel(s.m, a.data(), s.k, p.w, c.data(), s.n, ep);
+    benchmark::ClobberMemory();
+  }
+  nn::set_num_threads(saved);
+  nnbench::set_flop_counters(state, 2.0 * s.m * s.n * s.k, threads);
+}
+
+void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
+  IsaOverride isa(nn::gemm_ukernel(ukernel).isa);
+  const Problem p(s, ukernel);
+  // Per thread: one 64-row A tile and C tile, reused (hot in cache as in the fused loop).
+  const std::size_t a_floats = static_cast<std::size_t>(kTileRows) * s.k;
+  const std::size_t c_floats = static_cast<std::size_t>(kTileRows) * s.n;
+  nn::AlignedBuffer a(a_floats * threads), c(c_floats * threads);
+  fill(a.data(), a.size(), 6);
+  fill(c.data(), c.size(), 7);
+  for (auto _ : state) {
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for num_threads(threads) schedule(static)
+#endif
+    for (int t = 0; t < threads; ++t) {
+      const float* at = a.data() + a_floats * t;
+      float* ct = c.data() + c_floats * t;
+      const nn::GemmEpilogue ep = p.epilogue(s, ct, s.n);
+      for (int i = 0; i < kTilesPerIteration; ++i) nn::gemm(kTileRows, at, s.k, p.w, ct, s.n, ep);
+    }
+    benchmark::ClobberMemory();
+  }
+  nnbench::set_flop_counters(
+      state, 2.0 * kTileRows * kTilesPerIteration * threads * s.n * s.k, threads);
+}
+
+int register_all() {
+  for (int u = 0; u < nn::gemm_ukernel_count(); ++u) {
+    const nn::GemmUkernelInfo& info = nn::gemm_ukernel(u);
+    if (static_cast<int>(info.isa) > static_cast<int>(nn::detect_isa())) continue;
+    for (const GemmShape& s : kShapes)
+      for (int threads : {1, 2}) {
+        const std::string suffix =
+            std::string(s.name) + "/" + info.name + "/threads:" + std::to_string(threads);
+        benchmark::RegisterBenchmark(("gemm/" + suffix).c_str(), bm_full, s, u, threads)
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+        benchmark::RegisterBenchmark(("gemm_tile64/" + suffix).c_str(), bm_tiles, s, u, threads)
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
+      }
+  }
+  return 0;
+}
+
+const int kRegistered = register_all();
+
+}  // namespace

@@ -1,0 +1,154 @@
+#include "nn/conv2d.h"
+
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
+#include "nn/activation.h"
+#include "nn/error.h"
+#include "nn/threads.h"
+
+namespace nn {
+
+namespace {
+
+void check_params(const Conv2dParams& p) {
+  if (p.cin <= 0 || p.cout <= 0 || p.kh <= 0 || p.kw <= 0 || p.stride_h <= 0 ||
+      p.stride_w <= 0 || p.pad_h < 0 || p.pad_w < 0 || p.groups <= 0 || p.cin % p.groups ||
+      p.cout % p.groups)
+    throw Error("conv2d: invalid parameters");
+}
+
+}  // namespace
+
+bool Conv2dWeights::is_pointwise() const {
+  return p_.kh == 1 && p_.kw == 1 && p_.stride_h == 1 && p_.stride_w == 1 && p_.pad_h == 0 &&
+         p_.pad_w == 0;
+}
+
+Conv2dWeights Conv2dWeights::pack(const float* w, const float* bias, const Conv2dParams& p,
+                                  Isa isa) {
+  check_params(p);
+  if (p.groups != 1) throw Error("conv2d: grouped convolution is not supported by the GEMM path");
+  Conv2dWeights out;
+  out.p_ = p;
+  // im2col rows are ordered (ky, kx, c) because NHWC keeps a pixel's channels
+  // contiguous; PyTorch stores (c, ky, kx), so reorder before packing.
+  const int k = p.kh * p.kw * p.cin;
+  std::vector<float> reordered(static_cast<std::size_t>(p.cout) * k);
+  for (int o = 0; o < p.cout; ++o)
+    for (int c = 0; c < p.cin; ++c)
+      for (int ky = 0; ky < p.kh; ++ky)
+        for (int kx = 0; kx < p.kw; ++kx)
+          reordered[static_cast<std::size_t>(o) * k + (ky * p.kw + kx) * p.cin + c] =
+              w[((static_cast<std::size_t>(o) * p.cin + c) * p.kh + ky) * p.kw + kx];
+  out.gemm_ = GemmWeights::pack(reordered.data(), p.cout, k, isa);
+  if (bias) {
+    out.bias_.resize(p.cout);
+    std::memcpy(out.bias_.data(), bias, sizeof(float) * p.cout);
+  }
+  return out;
+}
+
+Shape conv2d_output_shape(const Shape& in, const Conv2dParams& p) {
+  Shape s;
+  s.n = in.n;
+  s.h = (in.h + 2 * p.pad_h - p.kh) / p.stride_h + 1;
+  s.w = (in.w + 2 * p.pad_w - p.kw) / p.stride_w + 1;
+  s.c = p.cout;
+  if (in.h + 2 * p.pad_h < p.kh || in.w + 2 * p.pad_w < p.kw) s.h = s.w = 0;
+  return s;
+}
+
+std::size_t conv2d_scratch_floats(const Conv2dParams& p, int out_w) {
+  if (p.kh == 1 && p.kw == 1 && p.stride_h == 1 && p.stride_w == 1 && p.pad_h == 0 && p.pad_w == 0)
+    return 0;
+  return static_cast<std::size_t>(out_w) * p.kh * p.kw * p.cin;
+}
+
+void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out, int n,
+                 int y0, int y1, float* scratch, Act act, const float* residual,
+                 bool act_after_residual) {
+  const Conv2dParams& p = w.params();
+  const int ow = out.shape.w, cin = p.cin;
+  const int k = p.kh * p.kw * cin;
+  GemmEpilogue ep;
+  ep.bias = w.bias();
+  ep.act = act;
+  ep.act_after_residual = act_after_residual;
+  ep.ldr = out.shape.c;
+  for (int oy = y0; oy < y1; ++oy) {
+    float* dst = out.pixel(n, oy, 0);
+    ep.residual = residual ? residual + (dst - out.data) : nullptr;
+    if (w.is_pointwise()) {
+      gemm(ow, in.pixel(n, oy, 0), cin, w.gemm(), dst, out.shape.c, ep);
+      continue;
+    }
+    // im2col of one output row: row ox holds the (ky, kx, c) patch, zeros outside.
+    for (int ox = 0; ox < ow; ++ox) {
+      float* col = scratch + static_cast<std::size_t>(ox) * k;
+      const int ix0 = ox * p.stride_w - p.pad_w;
+      for (int ky = 0; ky < p.kh; ++ky) {
+        const int iy = oy * p.stride_h - p.pad_h + ky;
+        float* row = col + static_cast<std::size_t>(ky) * p.kw * cin;
+        if (iy < 0 || iy >= in.shape.h) {
+          std::memset(row, 0, sizeof(float) * p.kw * cin);
+          continue;
+        }
+        // Columns [kx_lo, kx_hi) of this kernel row fall inside the image.
+        const int kx_lo = std::min(p.kw, std::max(0, -ix0));
+        const int kx_hi = std::max(kx_lo, std::min(p.kw, in.shape.w - ix0));
+        std::memset(row, 0, sizeof(float) * kx_lo * cin);
+        if (kx_hi > kx_lo)
+          std::memcpy(row + static_cast<std::size_t>(kx_lo) * cin, in.pixel(n, iy, ix0 + kx_lo),
+                      sizeof(float) * (kx_hi - kx_lo) * cin);
+        std::memset(row + static_cast<std::size_t>(kx_hi) * cin, 0,
+                    sizeof(float) * (p.kw - kx_hi) * cin);
+      }
+    }
+    gemm(ow, scratch, k, w.gemm(), dst, out.shape.c, ep);
+  }
+}
+
+void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out,
+            float* scratch, Act act, const float* residual, bool act_after_residual) {
+  if (in.shape.c != w.params().cin || out.shape != conv2d_output_shape(in.shape, w.params()))
+    throw Error("conv2d: tensor shapes do not match the convolution");
+  const std::size_t per_thread = conv2d_scratch_floats(w.params(), out.shape.w);
+  const int rows = out.shape.n * out.shape.h;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+  for (int r = 0; r < rows; ++r) {
+    float* mine = scratch ? scratch + per_thread * thread_index() : nullptr;
+    conv2d_rows(in, w, out, r / out.shape.h, r % out.shape.h, r % out.shape.h + 1, mine, act,
+                residual, act_after_residual);
+  }
+}
+
+void conv2d_ref(const ConstTensorView& in, const float* w, const float* bias,
+                const Conv2dParams& p, const TensorView& out, Act act) {
+  check_params(p);
+  const int cin_g = p.cin / p.groups, cout_g = p.cout / p.groups;
+  for (int n = 0; n < out.shape.n; ++n)
+    for (int oy = 0; oy < out.shape.h; ++oy)
+      for (int ox = 0; ox < out.shape.w; ++ox)
+        for (int o = 0; o < p.cout; ++o) {
+          const int g = o / cout_g;
+          double acc = bias ? bias[o] : 0.0;
+          for (int c = 0; c < cin_g; ++c)
+            for (int ky = 0; ky < p.kh; ++ky) {
+              const int iy = oy * p.stride_h - p.pad_h + ky;
+              if (iy < 0 || iy >= in.shape.h) continue;
+              for (int kx = 0; kx < p.kw; ++kx) {
+                const int ix = ox * p.stride_w - p.pad_w + kx;
+                if (ix < 0 || ix >= in.shape.w) continue;
+                acc += static_cast<double>(in.pixel(n, iy, ix)[g * cin_g + c]) *
+                       w[((static_cast<std::size_t>(o) * cin_g + c) * p.kh + ky) * p.kw + kx];
+              }
+            }
+          out.pixel(n, oy, ox)[o] = act_ref(act, static_cast<float>(acc));
+        }
+}
+
+}  // namespace nn

@@ -1,0 +1,268 @@
+#include "nn/dwconv.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <string>
+
+#include "nn/dwconv_kernel.h"
+#include "nn/error.h"
+
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
+namespace nn {
+namespace {
+
+// Channels per packed vector; the scalar path keeps whole rows of taps instead.
+int lanes_of(Isa isa) {
+  switch (isa) {
+    case Isa::Avx512: return 16;
+    case Isa::Avx2: return 8;
+    case Isa::Scalar: break;
+  }
+  return 0;
+}
+
+std::string describe(const DwConvParams& p) {
+  return std::to_string(p.kh) + "x" + std::to_string(p.kw) + " stride " +
+         std::to_string(p.stride_h) + "," + std::to_string(p.stride_w) + " pad " +
+         std::to_string(p.pad_h) + "," + std::to_string(p.pad_w);
+}
+
+void check_params(const DwConvParams& p) {
+  if (p.kh < 1 || p.kw < 1 || p.kh > kDwConvMaxKernel || p.kw > kDwConvMaxKernel ||
+      p.kh * p.kw > kDwConvMaxTaps)
+    throw Error("dwconv: kernel " + describe(p) + ": kernel sides must be 1.." +
+                std::to_string(kDwConvMaxKernel) + " with at most " +
+                std::to_string(kDwConvMaxTaps) + " taps");
+  if (p.stride_h < 1 || p.stride_w < 1 || p.stride_h > 64 || p.stride_w > 64)
+    throw Error("dwconv: kernel " + describe(p) + ": stride must be 1..64");
+  if (p.pad_h < 0 || p.pad_w < 0 || p.pad_h > 4096 || p.pad_w > 4096)
+    throw Error("dwconv: kernel " + describe(p) + ": padding must be 0..4096");
+}
+
+void check_act(Act act) {
+  if (act != Act::None && act != Act::Relu && act != Act::HardSwish)
+    throw Error(
+        "dwconv: only None, Relu and HardSwish can be fused into the depthwise kernel; apply "
+        "this activation separately (nn/activation.h)");
+}
+
+// The epilogue activations, written exactly as PyTorch evaluates them.
+float activate(float v, Act act) {
+  if (act == Act::Relu) return v < 0.0f ? 0.0f : v;  // NaN stays NaN
+  if (act == Act::HardSwish) {
+    float t = v + 3.0f;
+    t = t < 0.0f ? 0.0f : t;
+    t = t > 6.0f ? 6.0f : t;
+    return v * t / 6.0f;
+  }
+  return v;
+}
+
+bool overlaps(const float* a, std::size_t na, const float* b, std::size_t nb) {
+  return a < b + nb && b < a + na;
+}
+
+void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const TensorView& out) {
+  if (in.shape.n < 1 || in.shape.h < 1 || in.shape.w < 1 || in.shape.c < 1)
+    throw Error("dwconv: input shape must be positive, got [" + std::to_string(in.shape.n) +
+                "," + std::to_string(in.shape.h) + "," + std::to_string(in.shape.w) + "," +
+                std::to_string(in.shape.c) + "]");
+  if (in.shape.c != c)
+    throw Error("dwconv: input has " + std::to_string(in.shape.c) + " channels, weights have " +
+                std::to_string(c));
+  const Shape want = dwconv_output_shape(in.shape, p);
+  if (out.shape != want)
+    throw Error("dwconv: output shape [" + std::to_string(out.shape.n) + "," +
+                std::to_string(out.shape.h) + "," + std::to_string(out.shape.w) + "," +
+                std::to_string(out.shape.c) + "] should be [" + std::to_string(want.n) + "," +
+                std::to_string(want.h) + "," + std::to_string(want.w) + "," +
+                std::to_string(want.c) + "]");
+  if (!in.data || !out.data) throw Error("dwconv: null tensor data");
+  if (overlaps(in.data, in.count(), out.data, out.count()))
+    throw Error("dwconv: output must not overlap the input");
+}
+
+// Scalar path on [kh][kw][c] taps: per output pixel, channels in chunks whose
+// accumulators stay on the stack; same order as dwconv_ref, hence bitwise equal to it.
+void dwconv_rows_scalar(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out,
+                        int n, int oy) {
+  const DwConvParams& p = w.params();
+  const Shape& is = in.shape;
+  const int c = is.c;
+  constexpr int kChunk = 64;
+  for (int ox = 0; ox < out.shape.w; ++ox) {
+    float* dst = out.pixel(n, oy, ox);
+    for (int c0 = 0; c0 < c; c0 += kChunk) {
+      const int cn = c - c0 < kChunk ? c - c0 : kChunk;
+      float acc[kChunk] = {};
+      for (int ky = 0; ky < p.kh; ++ky) {
+        const int iy = oy * p.stride_h - p.pad_h + ky;
+        if (iy < 0 || iy >= is.h) continue;
+        for (int kx = 0; kx < p.kw; ++kx) {
+          const int ix = ox * p.stride_w - p.pad_w + kx;
+          if (ix < 0 || ix >= is.w) continue;
+          const float* x = in.pixel(n, iy, ix) + c0;
+          const float* t = w.taps() + (static_cast<std::size_t>(ky) * p.kw + kx) * c + c0;
+          for (int i = 0; i < cn; ++i) acc[i] += x[i] * t[i];
+        }
+      }
+      const float* b = w.bias() + c0;
+      for (int i = 0; i < cn; ++i) dst[c0 + i] = activate(acc[i] + b[i], p.act);
+    }
+  }
+}
+
+int team_size() {
+#ifdef ROADNN_OPENMP
+  return omp_in_parallel() ? 1 : omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+}  // namespace
+
+Shape dwconv_output_shape(const Shape& in, const DwConvParams& p) {
+  check_params(p);
+  const int eh = in.h + 2 * p.pad_h - p.kh, ew = in.w + 2 * p.pad_w - p.kw;
+  if (in.h < 1 || in.w < 1 || eh < 0 || ew < 0)
+    throw Error("dwconv: input " + std::to_string(in.h) + "x" + std::to_string(in.w) +
+                " is smaller than kernel " + describe(p));
+  return Shape{in.n, eh / p.stride_h + 1, ew / p.stride_w + 1, in.c};
+}
+
+DwConvWeights DwConvWeights::pack(const float* w, const float* bias, int c, const DwConvParams& p,
+                                  Isa isa) {
+  check_params(p);
+  check_act(p.act);
+  if (c < 1) throw Error("dwconv: channel count must be positive, got " + std::to_string(c));
+  if (!w) throw Error("dwconv: null weights");
+  if (static_cast<int>(isa) > static_cast<int>(detect_isa())) isa = detect_isa();
+
+  DwConvWeights out;
+  out.c_ = c;
+  out.p_ = p;
+  out.isa_ = isa;
+  const std::size_t taps = static_cast<std::size_t>(p.kh) * p.kw;
+  const int lanes = lanes_of(isa);
+  if (lanes == 0) {
+    // [kh][kw][c]: the scalar loop runs over contiguous channels per tap.
+    out.taps_.resize(taps * c);
+    out.bias_.resize(c);
+    for (int ch = 0; ch < c; ++ch)
+      for (std::size_t t = 0; t < taps; ++t) out.taps_[t * c + ch] = w[ch * taps + t];
+  } else {
+    // [c/L][kh][kw][L], channel tail zero (AlignedBuffer zero-fills).
+    const std::size_t blocks = (static_cast<std::size_t>(c) + lanes - 1) / lanes;
+    out.taps_.resize(blocks * taps * lanes);
+    out.bias_.resize(blocks * lanes);
+    for (int ch = 0; ch < c; ++ch) {
+      const std::size_t cb = ch / lanes, lane = ch % lanes;
+      for (std::size_t t = 0; t < taps; ++t)
+        out.taps_[(cb * taps + t) * lanes + lane] = w[ch * taps + t];
+    }
+  }
+  if (bias)
+    for (int ch = 0; ch < c; ++ch) out.bias_[ch] = bias[ch];
+  return out;
+}
+
+void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out) {
+  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
+  const DwConvParams& p = w.params();
+  check_views(in, p, w.channels(), out);
+  const Shape& is = in.shape;
+  const Shape& os = out.shape;
+  const int threads = team_size();
+
+  if (w.isa() == Isa::Scalar) {
+    const long long rows = static_cast<long long>(os.n) * os.h;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows > 1)
+#endif
+    for (long long r = 0; r < rows; ++r)
+      dwconv_rows_scalar(in, w, out, static_cast<int>(r / os.h), static_cast<int>(r % os.h));
+    return;
+  }
+
+  DwConvJob job;
+  job.in = in.data;
+  job.out = out.data;
+  job.taps = w.taps();
+  job.bias = w.bias();
+  job.h = is.h;
+  job.w = is.w;
+  job.c = is.c;
+  job.oh = os.h;
+  job.ow = os.w;
+  job.kh = p.kh;
+  job.kw = p.kw;
+  job.stride_h = p.stride_h;
+  job.stride_w = p.stride_w;
+  job.pad_h = p.pad_h;
+  job.pad_w = p.pad_w;
+  job.act = static_cast<int>(p.act);
+  auto* block = w.isa() == Isa::Avx512 ? &dwconv_block_avx512 : &dwconv_block_avx2;
+
+  // Work items: (image, chunk of output rows, group of channel blocks). Inside an
+  // item the kernel walks tiles along W and, per tile, every block of the group, so
+  // the input is read from memory about once, whole pixels at a time. Each item
+  // restarts its rings of input rows, so chunks stay tall (16 rows measured best for
+  // ConvNeXt's shapes, at least 8 when threads need items) and channel groups split
+  // only when threads still lack items.
+  const int lanes = lanes_of(w.isa());
+  const int blocks = (is.c + lanes - 1) / lanes;
+  const long long want = 4LL * threads;
+  int chunk = os.h < 16 ? os.h : 16;
+  while (threads > 1 && chunk > 8 && static_cast<long long>(os.n) * ((os.h + chunk - 1) / chunk) < want)
+    chunk = (chunk + 1) / 2;
+  const long long chunks = (os.h + chunk - 1) / chunk;
+  int groups = 1;
+  if (threads > 1 && os.n * chunks < want)
+    groups = static_cast<int>(std::min<long long>(blocks, (want + os.n * chunks - 1) / (os.n * chunks)));
+  const int group = (blocks + groups - 1) / groups;
+  groups = (blocks + group - 1) / group;
+  const long long items = static_cast<long long>(os.n) * chunks * groups;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1)
+#endif
+  for (long long i = 0; i < items; ++i) {
+    const int n = static_cast<int>(i / (chunks * groups));
+    const int y0 = static_cast<int>(i / groups % chunks) * chunk;
+    const int y1 = y0 + chunk < os.h ? y0 + chunk : os.h;
+    const int g0 = static_cast<int>(i % groups) * group;
+    const int g1 = g0 + group < blocks ? g0 + group : blocks;
+    block(job, n, g0, g1, y0, y1);
+  }
+}
+
+void dwconv_ref(const ConstTensorView& in, const float* w, const float* bias,
+                const DwConvParams& p, const TensorView& out) {
+  check_params(p);
+  check_act(p.act);
+  if (!w) throw Error("dwconv_ref: null weights");
+  check_views(in, p, in.shape.c, out);
+  const Shape& is = in.shape;
+  for (int n = 0; n < out.shape.n; ++n)
+    for (int oy = 0; oy < out.shape.h; ++oy)
+      for (int ox = 0; ox < out.shape.w; ++ox)
+        for (int ch = 0; ch < is.c; ++ch) {
+          float acc = 0.0f;
+          for (int ky = 0; ky < p.kh; ++ky) {
+            const int iy = oy * p.stride_h - p.pad_h + ky;
+            if (iy < 0 || iy >= is.h) continue;
+            for (int kx = 0; kx < p.kw; ++kx) {
+              const int ix = ox * p.stride_w - p.pad_w + kx;
+              if (ix < 0 || ix >= is.w) continue;
+              acc += in.pixel(n, iy, ix)[ch] * w[(static_cast<std::size_t>(ch) * p.kh + ky) * p.kw + kx];
+            }
+          }
+          const float b = bias ? bias[ch] : 0.0f;
+          out.pixel(n, oy, ox)[ch] = activate(acc + b, p.act);
+        }
+}
+
+}  // namespace nn

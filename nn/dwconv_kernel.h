@@ -1,0 +1,38 @@
+// Interface between nn/dwconv.cpp (validation, packing, threading) and the ISA
+// kernels in dwconv_avx2.cpp / dwconv_avx512.cpp. Plain data and declarations only:
+// the ISA files include it, so it must not define inline functions or templates.
+#pragma once
+
+#include <cstddef>
+
+namespace nn {
+
+// One depthwise convolution call. Taps are packed [c/L][kh][kw][L] (L = 16 for
+// AVX-512, 8 for AVX2, zero-padded channel tail); bias is [c rounded up to L], zeros
+// where the layer has none.
+struct DwConvJob {
+  const float* in = nullptr;  // NHWC [n, h, w, c]
+  float* out = nullptr;       // NHWC [n, oh, ow, c]
+  const float* taps = nullptr;
+  const float* bias = nullptr;
+  int h = 0, w = 0, c = 0;
+  int oh = 0, ow = 0;
+  int kh = 0, kw = 0, stride_h = 1, stride_w = 1, pad_h = 0, pad_w = 0;
+  int act = 0;  // static_cast<int>(nn::Act): None, Relu or HardSwish
+};
+
+// Largest kh * kw the kernels accept: one tile's zero-padded input rows live in a
+// fixed stack buffer of kh * kw * 16 floats at the least (64 KiB).
+constexpr int kDwConvMaxTaps = 1024;
+constexpr int kDwConvMaxKernel = 32;
+
+// Target size of one channel block's ring of padded input rows (kept in L1).
+constexpr int kDwConvRingTargetBytes = 32 * 1024;
+
+// Computes output rows [oy0, oy1) of image `n` for channel blocks [cb0, cb1) (block
+// cb covers channels [cb*L, cb*L+L) clipped to c). Each output element is summed in
+// the fixed order ky, kx ascending, so the split into calls never changes a result.
+void dwconv_block_avx512(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
+void dwconv_block_avx2(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
+
+}  // namespace nn

@@ -1,0 +1,91 @@
+// Internal to the GEMM: the micro-kernels and the one list that names them.
+//
+// NN_GEMM_UKERNELS drives everything that has to know the kernels (XNNPACK-style): the
+// declarations below, the table gemm.cpp dispatches from, the tests that check every
+// kernel against gemm_ref and the benchmarks that compare them. The first entry of each
+// ISA is the kernel GemmWeights::pack() uses for that ISA.
+//
+// A micro-kernel computes an mr x nr tile (mr <= MR, nr <= NR) of C over one K block:
+//   acc[r][j] = tile.acc ? tile.acc[r][j] : 0
+//   for k in [0, kc): acc[r][j] = fma(a[r][k], w[k][j], acc[r][j])
+// with one fused multiply-add per k in increasing k (the scalar kernel: a multiply, then an
+// add). Partial sums are stored as float and reloaded exactly, so splitting K into blocks
+// does not change a single bit: every element of C gets the same operation sequence no
+// matter which tile, row split or thread computes it.
+//
+// This header is included by the *_avx2.cpp / *_avx512.cpp files: declarations and plain
+// structs only (see cmake/isa.cmake).
+#pragma once
+
+#include <cstddef>
+
+#include "nn/isa.h"
+
+namespace nn {
+
+// The epilogue of nn/gemm.h for one tile; pointers already point at the tile's first
+// column (bias, scale) or first element (residual).
+struct GemmTileEpilogue {
+  const float* bias;
+  const float* scale;
+  const float* residual;
+  std::ptrdiff_t ldr;
+  int act;  // static_cast<int>(nn::Act)
+  bool act_after_residual;
+};
+
+struct GemmTile {
+  const float* a;       // row 0, column k0 of A
+  std::ptrdiff_t lda;
+  const float* w;       // the panel's k0 row: w[k * NR + j], 64-byte aligned
+  int kc;               // K steps in this block, >= 1
+  int mr, nr;           // valid rows 1..MR and columns 1..NR
+  const float* acc;     // partial sums to continue from (acc[r * ld_acc + j]), or null
+  std::ptrdiff_t ld_acc;
+  float* c;             // destination row 0, column 0
+  std::ptrdiff_t ldc;
+  // Null: c is a partial-sum buffer (64-byte aligned, ldc a multiple of 16, all NR
+  // columns written, no epilogue). Otherwise the final block: epilogue, then only the
+  // nr valid columns of C are written.
+  const GemmTileEpilogue* ep;
+  // Cache lines (64 bytes each, from pf) the kernel prefetches into L2, one per K step,
+  // at most kc of them: the driver points them at the W block it needs next, so the
+  // stream from L3 overlaps this tile's arithmetic. pf_lines = 0: none.
+  const float* pf;
+  int pf_lines;
+};
+
+using GemmUkernelFn = void (*)(const GemmTile& tile);
+
+// X(function, Isa enumerator, MR, NR). Panel layout for a kernel: [ceil(n/NR)][k][NR],
+// zero-padded columns. The first kernel of each ISA is its default. On Zen 5 (measured
+// with bench/gemm_bench.cpp on the ConvNeXt-Tiny shapes) 8x48 (24 zmm accumulators;
+// 3 W loads and 8 broadcasts per 24 FMAs; 48 divides every ConvNeXt width) matches or
+// edges out 4x96; 12x32 (general-register spills) and 6x64 (a third wasted at N = 96)
+// were 5-20% slower and left out. Of the AVX2 pair (12 ymm accumulators each), 4x24
+// (7 loads per 12 FMAs against 8) is ahead by up to 20% on K = 96 and on large W.
+#define NN_GEMM_UKERNELS(X)                 \
+  X(gemm_f32_8x48_avx512, Avx512, 8, 48)    \
+  X(gemm_f32_4x96_avx512, Avx512, 4, 96)    \
+  X(gemm_f32_4x24_avx2, Avx2, 4, 24)        \
+  X(gemm_f32_6x16_avx2, Avx2, 6, 16)        \
+  X(gemm_f32_4x16_scalar, Scalar, 4, 16)
+
+#define NN_GEMM_DECLARE_UKERNEL(fn, isa, mr, nr) void fn(const GemmTile& tile);
+NN_GEMM_UKERNELS(NN_GEMM_DECLARE_UKERNEL)
+#undef NN_GEMM_DECLARE_UKERNEL
+
+struct GemmUkernelInfo {
+  const char* name;
+  Isa isa;
+  int mr, nr;
+  GemmUkernelFn fn;
+};
+
+// The list above as a table (gemm.cpp); ukernel indexes it.
+int gemm_ukernel_count();
+const GemmUkernelInfo& gemm_ukernel(int ukernel);
+// Index of the default kernel for `isa`.
+int gemm_default_ukernel(Isa isa);
+
+}  // namespace nn

@@ -1,0 +1,326 @@
+#include "nn/models/convnext.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "nn/activation.h"
+#include "nn/error.h"
+#include "nn/layernorm.h"
+#include "nn/layout.h"
+#include "nn/threads.h"
+
+namespace nn {
+
+namespace {
+
+constexpr int kMlpTile = 64;  // rows of the fused LN -> pw1 -> GELU -> pw2 tile
+
+std::string join(const std::vector<int>& v) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  return s + "]";
+}
+
+std::string nchw(const Shape& s) {
+  return "[" + std::to_string(s.n) + ", " + std::to_string(s.c) + ", " + std::to_string(s.h) +
+         ", " + std::to_string(s.w) + "]";
+}
+
+AlignedBuffer load_vec(const weights::SafeTensors& st, const std::string& name) {
+  std::vector<float> v = st.f32(name);
+  AlignedBuffer b(v.size());
+  std::copy(v.begin(), v.end(), b.data());
+  return b;
+}
+
+// The fused MLP keeps its hidden tile in cache; with too few tiles to share among
+// the threads, the plain layer-by-layer path parallelises the GEMMs over columns
+// instead. Both compute every element identically (same kernels, same K order).
+bool use_fused_mlp(std::size_t m, int threads) {
+  return (m + kMlpTile - 1) / kMlpTile >= static_cast<std::size_t>(4 * threads);
+}
+
+}  // namespace
+
+std::string ConvNeXtConfig::describe() const {
+  return "dims " + join(dims) + ", depths " + join(depths);
+}
+
+ConvNeXtConfig convnext_tiny_config() { return {{96, 192, 384, 768}, {3, 3, 9, 3}}; }
+ConvNeXtConfig convnext_small_config() { return {{96, 192, 384, 768}, {3, 3, 27, 3}}; }
+ConvNeXtConfig convnext_base_config() { return {{128, 256, 512, 1024}, {3, 3, 27, 3}}; }
+
+ConvNeXtConfig convnext_config_from(const weights::SafeTensors& st, const std::string& prefix) {
+  ConvNeXtConfig cfg;
+  const std::string stem = prefix + "0.0.weight";
+  if (!st.has(stem))
+    throw weights::Error(st.source() + ": missing tensor '" + stem +
+                         "' (no ConvNeXt stem under '" + prefix + "')");
+  for (int s = 0;; ++s) {
+    const std::string stage = prefix + std::to_string(2 * s + 1) + ".";
+    int depth = 0;
+    while (st.has(stage + std::to_string(depth) + ".layer_scale")) ++depth;
+    if (depth == 0) break;
+    const auto& shape = st.info(stage + "0.layer_scale").shape;
+    if (shape.empty() || shape[0] <= 0 || shape[0] > 65536)
+      throw weights::Error(st.source() + ": tensor '" + stage + "0.layer_scale' has an invalid shape");
+    cfg.dims.push_back(static_cast<int>(shape[0]));
+    cfg.depths.push_back(depth);
+  }
+  if (cfg.dims.empty())
+    throw weights::Error(st.source() + ": missing tensor '" + prefix +
+                         "1.0.layer_scale' (no ConvNeXt block found)");
+  return cfg;
+}
+
+std::vector<weights::TensorSpec> convnext_tensor_specs(const ConvNeXtConfig& cfg,
+                                                       const std::string& prefix) {
+  using Dims = std::vector<std::int64_t>;
+  std::vector<weights::TensorSpec> specs;
+  const std::int64_t c0 = cfg.dims[0];
+  specs.push_back({prefix + "0.0.weight", Dims{c0, 3, 4, 4}});
+  specs.push_back({prefix + "0.0.bias", Dims{c0}});
+  specs.push_back({prefix + "0.1.weight", Dims{c0}});
+  specs.push_back({prefix + "0.1.bias", Dims{c0}});
+  for (std::size_t s = 0; s < cfg.dims.size(); ++s) {
+    const std::int64_t c = cfg.dims[s];
+    if (s > 0) {
+      const std::string d = prefix + std::to_string(2 * s) + ".";
+      const std::int64_t ci = cfg.dims[s - 1];
+      specs.push_back({d + "0.weight", Dims{ci}});
+      specs.push_back({d + "0.bias", Dims{ci}});
+      specs.push_back({d + "1.weight", Dims{c, ci, 2, 2}});
+      specs.push_back({d + "1.bias", Dims{c}});
+    }
+    for (int i = 0; i < cfg.depths[s]; ++i) {
+      const std::string b = prefix + std::to_string(2 * s + 1) + "." + std::to_string(i) + ".";
+      specs.push_back({b + "layer_scale", Dims{c, 1, 1}});
+      specs.push_back({b + "block.0.weight", Dims{c, 1, 7, 7}});
+      specs.push_back({b + "block.0.bias", Dims{c}});
+      specs.push_back({b + "block.2.weight", Dims{c}});
+      specs.push_back({b + "block.2.bias", Dims{c}});
+      specs.push_back({b + "block.3.weight", Dims{4 * c, c}});
+      specs.push_back({b + "block.3.bias", Dims{4 * c}});
+      specs.push_back({b + "block.5.weight", Dims{c, 4 * c}});
+      specs.push_back({b + "block.5.bias", Dims{c}});
+    }
+  }
+  return specs;
+}
+
+ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
+    : cfg_(convnext_config_from(st, prefix)) {
+  weights::check_tensors(st, convnext_tensor_specs(cfg_, prefix));
+  auto count = [this](std::size_t floats) { weight_bytes_ += floats * sizeof(float); };
+
+  Conv2dParams stem;
+  stem.cin = 3;
+  stem.cout = cfg_.dims[0];
+  stem.kh = stem.kw = stem.stride_h = stem.stride_w = 4;
+  {
+    auto w = st.f32(prefix + "0.0.weight");
+    auto b = st.f32(prefix + "0.0.bias");
+    stem_ = Conv2dWeights::pack(w.data(), b.data(), stem);
+    weight_bytes_ += stem_.gemm().bytes();
+  }
+  stem_gamma_ = load_vec(st, prefix + "0.1.weight");
+  stem_beta_ = load_vec(st, prefix + "0.1.bias");
+  count(2 * cfg_.dims[0]);
+
+  for (std::size_t s = 0; s < cfg_.dims.size(); ++s) {
+    Stage stage;
+    stage.dim = cfg_.dims[s];
+    const int c = stage.dim;
+    if (s > 0) {
+      const std::string d = prefix + std::to_string(2 * s) + ".";
+      stage.has_down = true;
+      stage.down_gamma = load_vec(st, d + "0.weight");
+      stage.down_beta = load_vec(st, d + "0.bias");
+      Conv2dParams p;
+      p.cin = cfg_.dims[s - 1];
+      p.cout = c;
+      p.kh = p.kw = p.stride_h = p.stride_w = 2;
+      auto w = st.f32(d + "1.weight");
+      auto b = st.f32(d + "1.bias");
+      stage.down = Conv2dWeights::pack(w.data(), b.data(), p);
+      weight_bytes_ += stage.down.gemm().bytes();
+      count(2 * p.cin + c);
+    }
+    for (int i = 0; i < cfg_.depths[s]; ++i) {
+      const std::string b = prefix + std::to_string(2 * s + 1) + "." + std::to_string(i) + ".";
+      Block blk;
+      DwConvParams dp;  // 7x7, stride 1, pad 3
+      auto dw = st.f32(b + "block.0.weight");
+      auto dwb = st.f32(b + "block.0.bias");
+      blk.dw = DwConvWeights::pack(dw.data(), dwb.data(), c, dp);
+      blk.ln_gamma = load_vec(st, b + "block.2.weight");
+      blk.ln_beta = load_vec(st, b + "block.2.bias");
+      auto w1 = st.f32(b + "block.3.weight");
+      blk.pw1 = GemmWeights::pack(w1.data(), 4 * c, c);
+      blk.b1 = load_vec(st, b + "block.3.bias");
+      auto w2 = st.f32(b + "block.5.weight");
+      blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
+      blk.b2 = load_vec(st, b + "block.5.bias");
+      blk.layer_scale = load_vec(st, b + "layer_scale");
+      weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
+      count(49 * c + c + 2 * c + 4 * c + c + c);
+      stage.blocks.push_back(std::move(blk));
+    }
+    stages_.push_back(std::move(stage));
+  }
+}
+
+void ConvNeXt::plan(int n, int h, int w) {
+  if (n < 1) throw Error("convnext: batch size must be at least 1");
+  if (h < 32 || w < 32)
+    throw Error("convnext: input " + std::to_string(h) + "x" + std::to_string(w) +
+                " is smaller than the minimum 32x32");
+  planned_threads_ = num_threads();
+  in_shape_ = {n, h, w, 3};
+  stage_shapes_.clear();
+  prof_.clear();
+
+  Conv2dParams sp = stem_.params();
+  Shape s = conv2d_output_shape(in_shape_, sp);
+  std::size_t act = std::max(in_shape_.count(), s.count());
+  conv_scratch_ = conv2d_scratch_floats(sp, s.w);
+  std::size_t mlp_scratch = 0;  // per thread for fused stages; whole for unfused
+  std::size_t shared_scratch = 0;
+  prof_stem_ = prof_.add("features.0", "conv 4x4/4 + LayerNorm", nchw(s),
+                         2.0 * s.count() * 48);
+  for (std::size_t si = 0; si < stages_.size(); ++si) {
+    Stage& st = stages_[si];
+    if (st.has_down) {
+      Shape d = conv2d_output_shape(s, st.down.params());
+      if (d.h < 1 || d.w < 1) throw Error("convnext: input too small for the downsampling layers");
+      conv_scratch_ = std::max(conv_scratch_, conv2d_scratch_floats(st.down.params(), d.w));
+      st.prof_down = prof_.add("features." + std::to_string(2 * si), "LayerNorm + conv 2x2/2",
+                               nchw(d), 2.0 * d.count() * 4 * s.c);
+      s = d;
+    }
+    stage_shapes_.push_back(s);
+    act = std::max(act, s.count());
+    const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
+    const std::size_t c = st.dim;
+    if (use_fused_mlp(m, planned_threads_))
+      mlp_scratch = std::max(mlp_scratch, kMlpTile * c * 5);
+    else
+      shared_scratch = std::max(shared_scratch, m * c * 5);
+    for (std::size_t i = 0; i < st.blocks.size(); ++i) {
+      Block& b = st.blocks[i];
+      const std::string name = "features." + std::to_string(2 * si + 1) + "." + std::to_string(i);
+      b.prof_dw = prof_.add(name, "dwconv 7x7", nchw(s), 2.0 * s.count() * 49);
+      b.prof_mlp = prof_.add(name, "LN+pw1+GELU+pw2+scale+res", nchw(s), 2.0 * m * c * 4 * c * 2);
+    }
+  }
+  out_shape_ = s;
+  mlp_tile_ = mlp_scratch;
+  scratch_per_thread_ = std::max(conv_scratch_, mlp_scratch);
+  act_a_.resize(act);
+  act_b_.resize(act);
+  scratch_.resize(std::max(scratch_per_thread_ * planned_threads_, shared_scratch));
+}
+
+std::size_t ConvNeXt::arena_bytes() const {
+  return (act_a_.size() + act_b_.size() + scratch_.size()) * sizeof(float);
+}
+
+double ConvNeXt::flops() const {
+  double f = 0;
+  for (const auto& e : prof_.entries()) f += e.flops;
+  return f;
+}
+
+void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
+  Profiler::Scope t(&prof_, prof_stem_);
+  // The stem reads NHWC; act_b_ is free until the first block.
+  nchw_to_nhwc(input_nchw, in_shape_.n, 3, in_shape_.h, in_shape_.w, act_b_.data());
+  TensorView out{act_a_.data(), s};
+  conv2d(ConstTensorView(act_b_.data(), in_shape_), stem_, out, scratch_.data());
+  layernorm_parallel(out.pixels(), s.c, out.data, s.c, out.data, s.c, stem_gamma_.data(),
+                     stem_beta_.data(), cfg_.eps);
+}
+
+void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln,
+                            float* hid) {
+  float* x = act_a_.data() + m0 * c;
+  const float* t = act_b_.data() + m0 * c;
+  const int rows = static_cast<int>(m1 - m0);
+  layernorm(rows, c, t, c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  GemmEpilogue e1;
+  e1.bias = b.b1.data();
+  e1.act = Act::Gelu;
+  gemm(rows, ln, c, b.pw1, hid, 4 * c, e1);
+  GemmEpilogue e2;
+  e2.bias = b.b2.data();
+  e2.scale = b.layer_scale.data();
+  e2.residual = x;
+  e2.ldr = c;
+  gemm(rows, hid, 4 * c, b.pw2, x, c, e2);
+}
+
+void ConvNeXt::run_block(const Block& b, Shape s) {
+  const int c = s.c;
+  {
+    Profiler::Scope t(&prof_, b.prof_dw);
+    dwconv(ConstTensorView(act_a_.data(), s), b.dw, TensorView{act_b_.data(), s});
+  }
+  Profiler::Scope t(&prof_, b.prof_mlp);
+  const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
+  if (use_fused_mlp(m, planned_threads_)) {
+    const long tiles = static_cast<long>((m + kMlpTile - 1) / kMlpTile);
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+    for (long i = 0; i < tiles; ++i) {
+      float* ln = scratch_.data() + scratch_per_thread_ * thread_index();
+      float* hid = ln + static_cast<std::size_t>(kMlpTile) * c;
+      const std::size_t m0 = static_cast<std::size_t>(i) * kMlpTile;
+      run_mlp_rows(b, c, m0, std::min(m, m0 + kMlpTile), ln, hid);
+    }
+    return;
+  }
+  float* ln = scratch_.data();
+  float* hid = ln + m * c;
+  layernorm_parallel(m, c, act_b_.data(), c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  GemmEpilogue e1;
+  e1.bias = b.b1.data();
+  e1.act = Act::Gelu;
+  gemm_parallel(static_cast<int>(m), ln, c, b.pw1, hid, 4 * c, e1);
+  GemmEpilogue e2;
+  e2.bias = b.b2.data();
+  e2.scale = b.layer_scale.data();
+  e2.residual = act_a_.data();
+  e2.ldr = c;
+  gemm_parallel(static_cast<int>(m), hid, 4 * c, b.pw2, act_a_.data(), c, e2);
+}
+
+ConstTensorView ConvNeXt::forward(const float* input_nchw) {
+  if (act_a_.empty()) throw Error("convnext: forward() before plan()");
+  if (num_threads() > planned_threads_)
+    throw Error("convnext: the thread count rose to " + std::to_string(num_threads()) +
+                " after plan() was made for " + std::to_string(planned_threads_) +
+                "; call plan() again");
+  run_stem(input_nchw, stage_shapes_[0]);
+  // act_a_ holds the residual stream, act_b_ the depthwise output; a downsampling
+  // layer normalises act_a_ in place, convolves into act_b_ and the two swap roles.
+  Shape s = stage_shapes_[0];
+  for (std::size_t si = 0; si < stages_.size(); ++si) {
+    const Stage& st = stages_[si];
+    if (st.has_down) {
+      Profiler::Scope t(&prof_, st.prof_down);
+      const Shape prev = s;
+      s = stage_shapes_[si];
+      layernorm_parallel(static_cast<std::size_t>(prev.n) * prev.h * prev.w, prev.c, act_a_.data(),
+                         prev.c, act_a_.data(), prev.c, st.down_gamma.data(), st.down_beta.data(),
+                         cfg_.eps);
+      conv2d(ConstTensorView(act_a_.data(), prev), st.down, TensorView{act_b_.data(), s},
+             scratch_.data());
+      std::swap(act_a_, act_b_);
+    }
+    for (const Block& b : st.blocks) run_block(b, s);
+  }
+  return ConstTensorView(act_a_.data(), out_shape_);
+}
+
+}  // namespace nn

@@ -1,0 +1,106 @@
+// torchvision ConvNeXt `features` (stem, stages of CNBlocks, downsampling layers),
+// generic over the configuration: stage widths and block counts are read from the
+// weights, so ConvNeXt-T/S/B and small test configurations all run.
+//
+// Exactly torchvision 0.14's eval-mode computation:
+//   stem:  Conv2d(3, C0, 4, stride 4) -> LayerNorm2d(C0, eps 1e-6)
+//   block: x + layer_scale * Linear2(GELU(Linear1(LayerNorm(dwconv7x7(x)))))
+//   down:  LayerNorm2d(Ci) -> Conv2d(Ci, Ci+1, 2, stride 2)
+// NHWC inside; PyTorch's NCHW at the input.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "nn/buffer.h"
+#include "nn/conv2d.h"
+#include "nn/dwconv.h"
+#include "nn/gemm.h"
+#include "nn/profiler.h"
+#include "nn/tensor.h"
+#include "weights/safetensors.h"
+#include "weights/tensor_spec.h"
+
+namespace nn {
+
+struct ConvNeXtConfig {
+  std::vector<int> dims;    // channels per stage
+  std::vector<int> depths;  // blocks per stage
+  float eps = 1e-6f;
+  std::string describe() const;  // "dims [96, 192, 384, 768], depths [3, 3, 9, 3]"
+  bool operator==(const ConvNeXtConfig& o) const { return dims == o.dims && depths == o.depths; }
+};
+
+ConvNeXtConfig convnext_tiny_config();
+ConvNeXtConfig convnext_small_config();
+ConvNeXtConfig convnext_base_config();
+
+// Reads the configuration from tensor names and shapes under `prefix` ("features.").
+// Throws weights::Error naming the file if the stem or the first block is missing.
+ConvNeXtConfig convnext_config_from(const weights::SafeTensors& st, const std::string& prefix);
+
+// Every tensor the model reads, with its shape (torchvision state_dict names).
+std::vector<weights::TensorSpec> convnext_tensor_specs(const ConvNeXtConfig& cfg,
+                                                       const std::string& prefix);
+
+class ConvNeXt {
+ public:
+  // Checks every expected tensor (first problem reported by name) and repacks the
+  // weights for the active ISA. The SafeTensors object may be freed afterwards.
+  ConvNeXt(const weights::SafeTensors& st, const std::string& prefix = "features.");
+
+  const ConvNeXtConfig& config() const { return cfg_; }
+  int out_channels() const { return cfg_.dims.back(); }
+
+  // Plans the activation arena for NCHW inputs [n, 3, h, w] and the current thread
+  // count. Throws nn::Error for h or w below 32 or n below 1.
+  void plan(int n, int h, int w);
+  Shape input_shape() const { return in_shape_; }  // NHWC view of the planned input
+  Shape output_shape() const { return out_shape_; }  // NHWC
+  std::size_t arena_bytes() const;
+  std::size_t weight_bytes() const { return weight_bytes_; }
+
+  // Runs the planned input (NCHW, n*3*h*w floats). Returns an NHWC view into the
+  // arena, valid until the next forward or plan. Allocates nothing.
+  ConstTensorView forward(const float* input_nchw);
+
+  Profiler& profiler() { return prof_; }
+  double flops() const;  // multiply-adds x 2 of one forward at the planned size
+
+ private:
+  struct Block {
+    DwConvWeights dw;
+    AlignedBuffer ln_gamma, ln_beta, b1, b2, layer_scale;
+    GemmWeights pw1, pw2;
+    int prof_dw = -1, prof_mlp = -1;
+  };
+  struct Stage {
+    int dim = 0;
+    bool has_down = false;  // downsampling layer before this stage (all but the first)
+    AlignedBuffer down_gamma, down_beta;
+    Conv2dWeights down;
+    std::vector<Block> blocks;
+    int prof_down = -1;
+  };
+
+  void run_stem(const float* input_nchw, Shape s);
+  void run_block(const Block& b, Shape s);
+  void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln, float* hid);
+
+  ConvNeXtConfig cfg_;
+  Conv2dWeights stem_;
+  AlignedBuffer stem_gamma_, stem_beta_;
+  std::vector<Stage> stages_;
+  std::size_t weight_bytes_ = 0;
+
+  // Arena: two ping-pong activation buffers and per-thread scratch.
+  Shape in_shape_, out_shape_;
+  std::vector<Shape> stage_shapes_;
+  AlignedBuffer act_a_, act_b_, scratch_;
+  std::size_t scratch_per_thread_ = 0, conv_scratch_ = 0, mlp_tile_ = 0;
+  int planned_threads_ = 0;
+  Profiler prof_;
+  int prof_stem_ = -1;
+};
+
+}  // namespace nn

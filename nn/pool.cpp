@@ -1,0 +1,158 @@
+#include "nn/pool.h"
+
+#include <cstddef>
+#include <limits>
+#include <string>
+
+#include "nn/error.h"
+
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
+namespace nn {
+namespace {
+
+std::string str(const Shape& s) {
+  return "[" + std::to_string(s.n) + "," + std::to_string(s.h) + "," + std::to_string(s.w) + "," +
+         std::to_string(s.c) + "]";
+}
+
+void check_io(const char* who, const ConstTensorView& in, const TensorView& out,
+              const Shape& want) {
+  if (out.shape != want)
+    throw Error(std::string(who) + ": output shape " + str(out.shape) + " should be " + str(want));
+  if (!in.data || !out.data) throw Error(std::string(who) + ": null tensor data");
+  if (in.data < out.data + out.count() && out.data < in.data + in.count())
+    throw Error(std::string(who) + ": output must not overlap the input");
+}
+
+void check_input(const char* who, const Shape& in) {
+  if (in.n < 1 || in.h < 1 || in.w < 1 || in.c < 1)
+    throw Error(std::string(who) + ": input shape " + str(in) + " must be positive");
+}
+
+#ifdef ROADNN_OPENMP
+// Threads for a parallel loop: the whole team, or 1 when already inside a region.
+int team_size() { return omp_in_parallel() ? 1 : omp_get_max_threads(); }
+#endif
+
+}  // namespace
+
+Shape mean_over_rows_shape(const Shape& in) {
+  check_input("mean_over_rows", in);
+  return Shape{in.n, 1, in.w, in.c};
+}
+
+void mean_over_rows(const ConstTensorView& in, const TensorView& out) {
+  check_io("mean_over_rows", in, out, mean_over_rows_shape(in.shape));
+  const Shape& s = in.shape;
+  const long long row = static_cast<long long>(s.w) * s.c;
+  // Items: (image, 1024-float slice of a row); each element summed by one thread.
+  constexpr long long kSlice = 1024;
+  const long long slices = (row + kSlice - 1) / kSlice;
+  const long long items = s.n * slices;
+  const float h = static_cast<float>(s.h);
+#ifdef ROADNN_OPENMP
+  const int threads = team_size();
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1 && s.count() > 65536)
+#endif
+  for (long long it = 0; it < items; ++it) {
+    const long long n = it / slices;
+    const long long b = it % slices * kSlice;
+    const long long e = b + kSlice < row ? b + kSlice : row;
+    const float* src = in.data + n * s.h * row;
+    float* dst = out.data + n * row;
+    for (long long i = b; i < e; ++i) dst[i] = 0.0f;
+    for (int y = 0; y < s.h; ++y)
+      for (long long i = b; i < e; ++i) dst[i] += src[y * row + i];
+    for (long long i = b; i < e; ++i) dst[i] /= h;
+  }
+}
+
+Shape max_pool2d_output_shape(const Shape& in, const MaxPoolParams& p) {
+  check_input("max_pool2d", in);
+  const std::string k = std::to_string(p.kh) + "x" + std::to_string(p.kw) + " stride " +
+                        std::to_string(p.stride_h) + "," + std::to_string(p.stride_w) + " pad " +
+                        std::to_string(p.pad_h) + "," + std::to_string(p.pad_w);
+  if (p.kh < 1 || p.kw < 1 || p.stride_h < 1 || p.stride_w < 1 || p.pad_h < 0 || p.pad_w < 0)
+    throw Error("max_pool2d: kernel " + k + ": sizes and strides must be positive, pads >= 0");
+  if (2 * p.pad_h > p.kh || 2 * p.pad_w > p.kw)
+    throw Error("max_pool2d: kernel " + k + ": pad should be at most half of the kernel size");
+  const int eh = in.h + 2 * p.pad_h - p.kh, ew = in.w + 2 * p.pad_w - p.kw;
+  if (eh < 0 || ew < 0)
+    throw Error("max_pool2d: input " + str(in) + " is smaller than kernel " + k);
+  return Shape{in.n, eh / p.stride_h + 1, ew / p.stride_w + 1, in.c};
+}
+
+void max_pool2d(const ConstTensorView& in, const MaxPoolParams& p, const TensorView& out) {
+  check_io("max_pool2d", in, out, max_pool2d_output_shape(in.shape, p));
+  const Shape& s = in.shape;
+  const Shape& os = out.shape;
+  const long long rows = static_cast<long long>(os.n) * os.h;
+#ifdef ROADNN_OPENMP
+  const int threads = team_size();
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows > 1 && out.count() > 16384)
+#endif
+  for (long long r = 0; r < rows; ++r) {
+    const int n = static_cast<int>(r / os.h), oy = static_cast<int>(r % os.h);
+    const int y0 = oy * p.stride_h - p.pad_h;
+    const int ya = y0 < 0 ? 0 : y0;
+    const int yb = y0 + p.kh < s.h ? y0 + p.kh : s.h;
+    for (int ox = 0; ox < os.w; ++ox) {
+      const int x0 = ox * p.stride_w - p.pad_w;
+      const int xa = x0 < 0 ? 0 : x0;
+      const int xb = x0 + p.kw < s.w ? x0 + p.kw : s.w;
+      float* dst = out.pixel(n, oy, ox);
+      // Channels in chunks held in a local array, so the compiler sees no aliasing
+      // and vectorises the compare-select.
+      constexpr int kChunk = 64;
+      for (int c0 = 0; c0 < s.c; c0 += kChunk) {
+        const int cn = s.c - c0 < kChunk ? s.c - c0 : kChunk;
+        float m[kChunk];
+        for (int i = 0; i < cn; ++i) m[i] = -std::numeric_limits<float>::infinity();
+        for (int y = ya; y < yb; ++y)
+          for (int x = xa; x < xb; ++x) {
+            const float* src = in.pixel(n, y, x) + c0;
+            for (int i = 0; i < cn; ++i) {
+              const float v = src[i];
+              // PyTorch's test: take v if larger or NaN, so NaN sticks.
+              m[i] = (v > m[i] || v != v) ? v : m[i];
+            }
+          }
+        for (int i = 0; i < cn; ++i) dst[c0 + i] = m[i];
+      }
+    }
+  }
+}
+
+Shape global_avg_pool_shape(const Shape& in) {
+  check_input("global_avg_pool", in);
+  return Shape{in.n, 1, 1, in.c};
+}
+
+void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
+  check_io("global_avg_pool", in, out, global_avg_pool_shape(in.shape));
+  const Shape& s = in.shape;
+  constexpr int kSlice = 256;
+  const long long slices = (s.c + kSlice - 1) / kSlice;
+  const long long items = s.n * slices;
+  const long long pixels = static_cast<long long>(s.h) * s.w;
+#ifdef ROADNN_OPENMP
+  const int threads = team_size();
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1 && s.count() > 65536)
+#endif
+  for (long long it = 0; it < items; ++it) {
+    const long long n = it / slices;
+    const int c0 = static_cast<int>(it % slices) * kSlice;
+    const int cn = s.c - c0 < kSlice ? s.c - c0 : kSlice;
+    double acc[kSlice] = {};
+    const float* src = in.data + n * pixels * s.c + c0;
+    for (long long px = 0; px < pixels; ++px)
+      for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + i];
+    float* dst = out.data + n * s.c + c0;
+    for (int i = 0; i < cn; ++i) dst[i] = static_cast<float>(acc[i] / static_cast<double>(pixels));
+  }
+}
+
+}  // namespace nn

@@ -1,0 +1,42 @@
+#include "nn/profiler.h"
+
+#include <cstdio>
+
+namespace nn {
+
+int Profiler::add(std::string layer, std::string op, std::string shape, double flops) {
+  entries_.push_back({std::move(layer), std::move(op), std::move(shape), flops, 0.0, 0});
+  return static_cast<int>(entries_.size()) - 1;
+}
+
+void Profiler::reset_times() {
+  for (auto& e : entries_) {
+    e.total_ms = 0;
+    e.calls = 0;
+  }
+}
+
+std::string Profiler::table() const {
+  double total = 0;
+  for (const auto& e : entries_)
+    if (e.calls) total += e.total_ms / e.calls;
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-18s %-26s %-22s %10s %9s %6s\n", "layer", "op",
+                "output (NCHW)", "mean ms", "GFLOP/s", "share");
+  out += line;
+  for (const auto& e : entries_) {
+    if (!e.calls) continue;
+    const double ms = e.total_ms / e.calls;
+    char gf[32] = "-";
+    if (e.flops > 0 && ms > 0) std::snprintf(gf, sizeof gf, "%.1f", e.flops / (ms * 1e6));
+    std::snprintf(line, sizeof line, "%-18s %-26s %-22s %10.3f %9s %5.1f%%\n", e.layer.c_str(),
+                  e.op.c_str(), e.shape.c_str(), ms, gf, total > 0 ? 100.0 * ms / total : 0.0);
+    out += line;
+  }
+  std::snprintf(line, sizeof line, "%-18s %-26s %-22s %10.3f\n", "total", "", "", total);
+  out += line;
+  return out;
+}
+
+}  // namespace nn

@@ -1,0 +1,58 @@
+// Per-layer wall-clock times of a model's forward pass. Entries are created when a
+// model plans its memory, so timing a forward allocates nothing.
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace nn {
+
+struct ProfileEntry {
+  std::string layer;   // e.g. "features.1.0"
+  std::string op;      // e.g. "dwconv 7x7"
+  std::string shape;   // output shape, NCHW like PyTorch prints it
+  double flops = 0;    // per call
+  double total_ms = 0;
+  int calls = 0;
+};
+
+class Profiler {
+ public:
+  void clear() { entries_.clear(); }
+  // Registers an entry at planning time; returns its index.
+  int add(std::string layer, std::string op, std::string shape, double flops);
+  void reset_times();
+  bool enabled() const { return enabled_; }
+  void set_enabled(bool on) { enabled_ = on; }
+  const std::vector<ProfileEntry>& entries() const { return entries_; }
+  // A fixed-width table: layer, op, shape, mean ms, GFLOP/s, share of the total.
+  std::string table() const;
+
+  // Times the enclosing scope into entry `index` when profiling is on.
+  class Scope {
+   public:
+    Scope(Profiler* p, int index)
+        : p_(p && p->enabled_ ? p : nullptr), index_(index),
+          start_(p_ ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point()) {}
+    ~Scope() {
+      if (!p_) return;
+      auto& e = p_->entries_[index_];
+      e.total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+      e.calls += 1;
+    }
+    Scope(const Scope&) = delete;
+    Scope& operator=(const Scope&) = delete;
+
+   private:
+    Profiler* p_;
+    int index_;
+    std::chrono::steady_clock::time_point start_;
+  };
+
+ private:
+  std::vector<ProfileEntry> entries_;
+  bool enabled_ = false;
+};
+
+}  // namespace nn

@@ -1,0 +1,118 @@
+// AVX2+FMA element-wise math shared by the activation and GEMM-epilogue kernels, so both
+// produce the same bits. Include only from *_avx2.cpp files (compiled with AVX2 flags).
+// Same definitions and accuracy as nn/vecmath_avx512.h; the GELU table has 8 intervals
+// (one vpermps reaches 8 entries), hence a degree-6 polynomial.
+#pragma once
+
+// GCC 12 reports the _mm512_undefined_ps() inside its own intrinsics as "may be used
+// uninitialized" once they are inlined (GCC PR 105593, fixed in 13); the warning is
+// located in the intrinsic headers, so it is silenced for them only.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <immintrin.h>
+#pragma GCC diagnostic pop
+
+#include "nn/act.h"
+
+namespace nn {
+namespace {
+
+// See nn/vecmath_avx512.h for the fits.
+constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
+                kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
+constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;
+
+inline __m256 v256_exp(__m256 x) {
+  // |x| <= 100 keeps inf - inf out of the reduction; min/max return their second
+  // operand on NaN, so NaN passes.
+  x = _mm256_min_ps(_mm256_set1_ps(100.0f), x);
+  x = _mm256_max_ps(_mm256_set1_ps(-100.0f), x);
+  const __m256 n = _mm256_round_ps(_mm256_mul_ps(x, _mm256_set1_ps(kLog2e)),
+                                   _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+  __m256 r = _mm256_fnmadd_ps(n, _mm256_set1_ps(kLn2Hi), x);
+  r = _mm256_fnmadd_ps(n, _mm256_set1_ps(kLn2Lo), r);
+  __m256 p = _mm256_fmadd_ps(_mm256_set1_ps(kExpP4), r, _mm256_set1_ps(kExpP3));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP2));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP1));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP0));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
+  // 2^n from the exponent field; n clamped to [-127, 128] gives the bit patterns of 0
+  // and inf at the ends, i.e. underflow to zero and overflow to infinity.
+  const __m256 nc =
+      _mm256_min_ps(_mm256_max_ps(n, _mm256_set1_ps(-127.0f)), _mm256_set1_ps(128.0f));
+  const __m256i bits = _mm256_slli_epi32(
+      _mm256_add_epi32(_mm256_cvtps_epi32(nc), _mm256_set1_epi32(127)), 23);
+  return _mm256_mul_ps(p, _mm256_castsi256_ps(bits));
+}
+
+// h(a) = Phi(-a) on [0, 6): 8 intervals of width 3/4, a degree-6 polynomial in
+// u = a * 4/3 - 0.5 - i per interval i (weighted GELU error a * |dh| <= 1.6e-8).
+alignas(32) constexpr float kGeluTable8[7][8] = {
+    {0.353830218f, 0.130294532f, 0.0303963646f, 0.00433244929f, 0.000369078683f,
+     1.85367535e-05f, 5.44038755e-07f, 9.27496302e-09f},
+    {-0.278891265f, -0.158907637f, -0.0515897088f, -0.00954308826f, -0.0010058406f,
+     -6.04102061e-05f, -2.06773188e-06f, -4.0346201e-08f},
+    {0.0392201766f, 0.0670387f, 0.036274083f, 0.00939403474f, 0.00127300539f,
+     9.34398486e-05f, 3.77916899e-06f, 8.50568966e-08f},
+    {0.022466151f, -0.00395167386f, -0.012166841f, -0.00527177891f, -0.000979768345f,
+     -9.05413181e-05f, -4.38679581e-06f, -1.14271984e-07f},
+    {-0.00526561122f, -0.00544611132f, 0.00087547343f, 0.00171325111f, 0.000500864408f,
+     6.13693774e-05f, 3.66778431e-06f, 1.13190168e-07f},
+    {-0.00156722416f, 0.00120694831f, 0.000779021415f, -0.00021681338f, -0.000171171647f,
+     -3.15746765e-05f, -2.51333267e-06f, -9.82732615e-08f},
+    {0.000481751194f, 0.000221013193f, -0.000240751688f, -5.43378774e-05f, 3.35252989e-05f,
+     1.12106572e-05f, 1.20260199e-06f, 5.78770916e-08f},
+};
+
+// gelu(x) = x * Phi(x); see v512_gelu.
+inline __m256 v256_gelu(__m256 x) {
+  const __m256 a = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), x);
+  __m256 t = _mm256_fmadd_ps(a, _mm256_set1_ps(8.0f / 6.0f), _mm256_set1_ps(-0.5f));
+  t = _mm256_min_ps(t, _mm256_set1_ps(7.49999952f));
+  const __m256 magic = _mm256_set1_ps(12582912.0f);
+  const __m256 rounded = _mm256_add_ps(t, magic);
+  const __m256i idx = _mm256_castps_si256(rounded);
+  const __m256 u = _mm256_sub_ps(t, _mm256_sub_ps(rounded, magic));
+  __m256 h = _mm256_permutevar8x32_ps(_mm256_load_ps(kGeluTable8[6]), idx);
+  for (int j = 5; j >= 0; --j)
+    h = _mm256_fmadd_ps(h, u, _mm256_permutevar8x32_ps(_mm256_load_ps(kGeluTable8[j]), idx));
+  h = _mm256_and_ps(h, _mm256_cmp_ps(a, _mm256_set1_ps(6.0f), _CMP_LT_OQ));
+  const __m256 one_minus_h = _mm256_sub_ps(_mm256_set1_ps(1.0f), h);
+  // blendv picks h where the sign bit of x is set: Phi(x) = h(|x|) for x < 0.
+  const __m256 phi = _mm256_blendv_ps(one_minus_h, h, x);
+  return _mm256_mul_ps(x, phi);
+}
+
+inline __m256 v256_sigmoid(__m256 x) {
+  const __m256 e = v256_exp(_mm256_sub_ps(_mm256_setzero_ps(), x));
+  return _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_add_ps(_mm256_set1_ps(1.0f), e));
+}
+
+inline __m256 v256_relu(__m256 x) { return _mm256_max_ps(_mm256_setzero_ps(), x); }
+
+inline __m256 v256_relu6_shift3(__m256 x) {
+  const __m256 t = _mm256_max_ps(_mm256_setzero_ps(), _mm256_add_ps(x, _mm256_set1_ps(3.0f)));
+  return _mm256_min_ps(_mm256_set1_ps(6.0f), t);
+}
+
+inline __m256 v256_hardsigmoid(__m256 x) {
+  return _mm256_div_ps(v256_relu6_shift3(x), _mm256_set1_ps(6.0f));
+}
+
+inline __m256 v256_hardswish(__m256 x) {
+  return _mm256_div_ps(_mm256_mul_ps(x, v256_relu6_shift3(x)), _mm256_set1_ps(6.0f));
+}
+
+template <Act ACT>
+inline __m256 v256_act(__m256 x) {
+  if constexpr (ACT == Act::Relu) return v256_relu(x);
+  else if constexpr (ACT == Act::Gelu) return v256_gelu(x);
+  else if constexpr (ACT == Act::HardSwish) return v256_hardswish(x);
+  else if constexpr (ACT == Act::HardSigmoid) return v256_hardsigmoid(x);
+  else if constexpr (ACT == Act::Sigmoid) return v256_sigmoid(x);
+  else return x;
+}
+
+}  // namespace
+}  // namespace nn

@@ -1,0 +1,396 @@
+// GEMM: every micro-kernel of the list in nn/gemm_kernels.h against gemm_ref on awkward
+// shapes and every epilogue; bitwise determinism across row splits, thread counts and
+// K blocking; argument errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "nn/activation.h"
+#include "nn/error.h"
+#include "nn/gemm.h"
+#include "nn/gemm_kernels.h"
+#include "nn/threads.h"
+#include "tests/nn/isa_param.h"
+
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
+namespace {
+
+using nn::Act;
+using nn::GemmEpilogue;
+using nn::GemmWeights;
+
+constexpr Act kActs[] = {Act::None, Act::Relu, Act::Gelu, Act::HardSwish, Act::HardSigmoid,
+                         Act::Sigmoid};
+
+std::vector<float> random_vector(std::size_t n, unsigned seed, float lo = -1.0f, float hi = 1.0f) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<float> dist(lo, hi);
+  std::vector<float> v(n);
+  for (auto& x : v) x = dist(gen);
+  return v;
+}
+
+std::vector<int> supported_ukernels() {
+  std::vector<int> out;
+  for (int i = 0; i < nn::gemm_ukernel_count(); ++i)
+    if (static_cast<int>(nn::gemm_ukernel(i).isa) <= static_cast<int>(nn::detect_isa()))
+      out.push_back(i);
+  return out;
+}
+
+std::string ukernel_test_name(const testing::TestParamInfo<int>& info) {
+  return nn::gemm_ukernel(info.param).name;
+}
+
+enum class Residual { None, Separate, AliasC };
+
+struct EpilogueCase {
+  bool bias = false;
+  Act act = Act::None;
+  bool scale = false;
+  Residual residual = Residual::None;
+  bool act_after_residual = false;
+};
+
+std::string describe(int m, int n, int k, const EpilogueCase& e) {
+  static const char* kRes[] = {"none", "separate", "alias-C"};
+  return "m " + std::to_string(m) + " n " + std::to_string(n) + " k " + std::to_string(k) +
+         " bias " + std::to_string(e.bias) + " act " + std::to_string(static_cast<int>(e.act)) +
+         " scale " + std::to_string(e.scale) + " residual " +
+         kRes[static_cast<int>(e.residual)] + " after " + std::to_string(e.act_after_residual);
+}
+
+// One product through the packed kernel and through gemm_ref, compared element-wise:
+// |y - ref| <= 1.5 * 1e-5 * sum_k |a||w| * max(1, |scale|) + 1e-6 * |ref| + 3e-6
+// (1.5: the largest activation slope; 3e-6 covers the vector GELU/sigmoid error).
+void check_product(int ukernel, int m, int n, int k, const EpilogueCase& e, unsigned seed) {
+  SCOPED_TRACE(describe(m, n, k, e));
+  const std::ptrdiff_t lda = k + 5, ldc = n + 3;
+  const std::ptrdiff_t ldr = e.residual == Residual::AliasC ? ldc : n + 7;
+  const std::vector<float> a = random_vector(static_cast<std::size_t>(m) * lda, seed);
+  const std::vector<float> w = random_vector(static_cast<std::size_t>(n) * k, seed + 1);
+  const std::vector<float> bias = random_vector(n, seed + 2);
+  const std::vector<float> scale = random_vector(n, seed + 3, -2.0f, 2.0f);
+  const std::vector<float> res =
+      random_vector(static_cast<std::size_t>(m) * ldr, seed + 4, -3.0f, 3.0f);
+  // Sentinel between rows: the kernels must not write outside [m x n].
+  std::vector<float> c(static_cast<std::size_t>(m) * ldc, 12345.0f);
+  std::vector<float> c_ref(c.size(), 12345.0f);
+  if (e.residual == Residual::AliasC) {
+    c = res;
+    c_ref = res;
+  }
+  auto make_ep = [&](float* cbuf) {
+    GemmEpilogue ep;
+    ep.bias = e.bias ? bias.data() : nullptr;
+    ep.act = e.act;
+    ep.scale = e.scale ? scale.data() : nullptr;
+    ep.act_after_residual = e.act_after_residual;
+    if (e.residual == Residual::Separate) ep.residual = res.data();
+    if (e.residual == Residual::AliasC) ep.residual = cbuf;
+    ep.ldr = ldr;
+    return ep;
+  };
+  const GemmWeights packed = GemmWeights::pack_for_ukernel(w.data(), n, k, ukernel);
+  nn::gemm(m, a.data(), lda, packed, c.data(), ldc, make_ep(c.data()));
+  nn::gemm_ref(m, n, k, a.data(), lda, w.data(), c_ref.data(), ldc, make_ep(c_ref.data()));
+  int failures = 0;
+  for (int i = 0; i < m && failures < 5; ++i) {
+    for (int j = 0; j < ldc; ++j) {
+      const std::size_t idx = static_cast<std::size_t>(i) * ldc + j;
+      if (j >= n) {
+        const float expect = e.residual == Residual::AliasC ? res[idx] : 12345.0f;
+        if (c[idx] != expect && ++failures <= 5)
+          ADD_FAILURE() << "wrote outside C at row " << i << " col " << j;
+        continue;
+      }
+      double mag = 0.0;
+      for (int kk = 0; kk < k; ++kk)
+        mag += std::fabs(static_cast<double>(a[i * lda + kk]) *
+                         w[static_cast<std::size_t>(j) * k + kk]);
+      const double sc = e.scale ? std::max(1.0, std::fabs(static_cast<double>(scale[j]))) : 1.0;
+      const double tol = 1.5e-5 * mag * sc + 1e-6 * std::fabs(c_ref[idx]) + 3e-6;
+      if (!(std::fabs(static_cast<double>(c[idx]) - c_ref[idx]) <= tol) && ++failures <= 5)
+        ADD_FAILURE() << "row " << i << " col " << j << ": " << c[idx] << " vs ref " << c_ref[idx]
+                      << " (tol " << tol << ")";
+    }
+  }
+}
+
+class GemmUkernelTest : public testing::TestWithParam<int> {
+ protected:
+  const nn::GemmUkernelInfo& info() const { return nn::gemm_ukernel(GetParam()); }
+};
+
+// Every awkward size against the reference; the epilogue rotates through all variants.
+TEST_P(GemmUkernelTest, MatchesReferenceOnAwkwardShapes) {
+  const int mr = info().mr;
+  std::vector<int> ms = {1, 2, mr - 1, mr, mr + 1, 37, 200};
+  ms.erase(std::remove_if(ms.begin(), ms.end(), [](int v) { return v < 1; }), ms.end());
+  std::sort(ms.begin(), ms.end());
+  ms.erase(std::unique(ms.begin(), ms.end()), ms.end());
+  const int ns[] = {1, 3, 15, 16, 17, 31, 33, 63, 65, 96, 100};
+  const int ks[] = {1, 3, 17, 48, 96, 257, 600};
+  unsigned seed = 1;
+  for (int m : ms)
+    for (int n : ns)
+      for (int k : ks) {
+        EpilogueCase e;
+        e.bias = seed % 2 == 0;
+        e.act = kActs[seed % 6];
+        e.scale = seed % 3 == 0;
+        e.residual = static_cast<Residual>(seed % 5 % 3);
+        e.act_after_residual = seed % 7 == 0;
+        check_product(GetParam(), m, n, k, e, seed);
+        ++seed;
+        if (HasFailure()) return;
+      }
+}
+
+// Every epilogue combination on shapes with row and column tails and K blocking.
+TEST_P(GemmUkernelTest, EveryEpilogueCombination) {
+  const int shapes[][3] = {{info().mr + 3, 37, 20}, {29, 100, 600}};
+  unsigned seed = 1000;
+  for (const auto& s : shapes)
+    for (bool bias : {false, true})
+      for (Act act : kActs)
+        for (bool scale : {false, true})
+          for (Residual r : {Residual::None, Residual::Separate, Residual::AliasC})
+            for (bool after : {false, true}) {
+              if (r == Residual::None && after) continue;  // same as before the residual
+              EpilogueCase e{bias, act, scale, r, after};
+              check_product(GetParam(), s[0], s[1], s[2], e, ++seed);
+              if (HasFailure()) return;
+            }
+}
+
+// K far beyond one K block: partial sums cross several blocks through the scratch tile.
+TEST_P(GemmUkernelTest, LongK) {
+  EpilogueCase e;
+  e.bias = true;
+  e.act = Act::Gelu;
+  e.scale = true;
+  e.residual = Residual::AliasC;
+  check_product(GetParam(), 19, 70, 3100, e, 77);
+}
+
+struct DeterminismCase {
+  int m, n, k;
+};
+
+// Runs C = epilogue(A W^T) with the residual aliasing C, starting from the same C.
+class AliasedProduct {
+ public:
+  AliasedProduct(int ukernel, int m, int n, int k)
+      : m_(m), lda_(k + 1), ldc_(n + 2),
+        a_(random_vector(static_cast<std::size_t>(m) * lda_, 11)),
+        c0_(random_vector(static_cast<std::size_t>(m) * ldc_, 12)),
+        bias_(random_vector(n, 13)), scale_(random_vector(n, 14)),
+        w_(GemmWeights::pack_for_ukernel(random_vector(static_cast<std::size_t>(n) * k, 15).data(),
+                                         n, k, ukernel)) {}
+
+  GemmEpilogue epilogue(float* c) const {
+    GemmEpilogue ep;
+    ep.bias = bias_.data();
+    ep.act = Act::Gelu;
+    ep.scale = scale_.data();
+    ep.residual = c;
+    ep.ldr = ldc_;
+    return ep;
+  }
+  std::vector<float> fresh_c() const { return c0_; }
+  const float* a_row(int i) const { return a_.data() + static_cast<std::size_t>(i) * lda_; }
+
+  // gemm() over consecutive row ranges [bounds[i], bounds[i+1]).
+  std::vector<float> by_rows(const std::vector<int>& bounds) const {
+    std::vector<float> c = fresh_c();
+    for (std::size_t i = 0; i + 1 < bounds.size(); ++i) {
+      float* ci = c.data() + static_cast<std::size_t>(bounds[i]) * ldc_;
+      nn::gemm(bounds[i + 1] - bounds[i], a_row(bounds[i]), lda_, w_, ci, ldc_, epilogue(ci));
+    }
+    return c;
+  }
+  std::vector<float> parallel(int threads) const {
+    std::vector<float> c = fresh_c();
+    const int saved = nn::num_threads();
+    nn::set_num_threads(threads);
+    nn::gemm_parallel(m_, a_.data(), lda_, w_, c.data(), ldc_, epilogue(c.data()));
+    nn::set_num_threads(saved);
+    return c;
+  }
+  // gemm() on chunks of `rows` rows from inside an OpenMP parallel loop.
+  std::vector<float> inside_parallel_region(int rows) const {
+    std::vector<float> c = fresh_c();
+    const int chunks = (m_ + rows - 1) / rows;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for num_threads(2) schedule(dynamic)
+#endif
+    for (int i = 0; i < chunks; ++i) {
+      const int r0 = i * rows, r1 = std::min(m_, r0 + rows);
+      float* ci = c.data() + static_cast<std::size_t>(r0) * ldc_;
+      nn::gemm(r1 - r0, a_row(r0), lda_, w_, ci, ldc_, epilogue(ci));
+    }
+    return c;
+  }
+  // gemm_parallel() called by one thread of a parallel region runs on that thread alone.
+  std::vector<float> parallel_inside_region() const {
+    std::vector<float> c = fresh_c();
+#ifdef ROADNN_OPENMP
+#pragma omp parallel num_threads(2)
+#pragma omp single
+#endif
+    nn::gemm_parallel(m_, a_.data(), lda_, w_, c.data(), ldc_, epilogue(c.data()));
+    return c;
+  }
+  int m() const { return m_; }
+
+ private:
+  int m_;
+  std::ptrdiff_t lda_, ldc_;
+  std::vector<float> a_, c0_, bias_, scale_;
+  GemmWeights w_;
+};
+
+void expect_same_bits(const std::vector<float>& x, const std::vector<float>& y, const char* what) {
+  ASSERT_EQ(x.size(), y.size());
+  EXPECT_EQ(0, std::memcmp(x.data(), y.data(), x.size() * sizeof(float))) << what;
+}
+
+// Any row split and any thread count give the same bits: each element sees the same
+// FMA sequence and epilogue whichever tile (full or tail) computes it.
+TEST_P(GemmUkernelTest, BitwiseIdenticalForAnySplit) {
+  // Large M (row split), several row blocks with K blocks, small M (rows and panels
+  // split), long K.
+  const DeterminismCase cases[] = {{203, 100, 96}, {150, 70, 700}, {50, 200, 1100}, {7, 130, 3100}};
+  for (const auto& dc : cases) {
+    SCOPED_TRACE("m " + std::to_string(dc.m) + " n " + std::to_string(dc.n) + " k " +
+                 std::to_string(dc.k));
+    const AliasedProduct p(GetParam(), dc.m, dc.n, dc.k);
+    const std::vector<float> whole = p.by_rows({0, p.m()});
+    std::vector<int> odd = {0};
+    for (int b : {1, 4, 9, 30, 45, 131})
+      if (b < p.m()) odd.push_back(b);
+    odd.push_back(p.m());
+    expect_same_bits(whole, p.by_rows(odd), "rows split at odd offsets");
+    std::vector<int> singles;
+    for (int i = 0; i <= p.m(); ++i) singles.push_back(i);
+    expect_same_bits(whole, p.by_rows(singles), "one row at a time");
+    expect_same_bits(whole, p.parallel(1), "gemm_parallel, 1 thread");
+    expect_same_bits(whole, p.parallel(2), "gemm_parallel, 2 threads");
+    expect_same_bits(whole, p.parallel(3), "gemm_parallel, 3 threads");
+    expect_same_bits(whole, p.inside_parallel_region(13), "gemm() inside a parallel region");
+    expect_same_bits(whole, p.parallel_inside_region(), "gemm_parallel() inside a region");
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllKernels, GemmUkernelTest, testing::ValuesIn(supported_ukernels()),
+                         ukernel_test_name);
+
+class GemmIsaTest : public testing::TestWithParam<nn::Isa> {};
+
+// pack() picks the ISA's default kernel, and gemm_kernel_name() names it.
+TEST_P(GemmIsaTest, PackUsesTheIsaDefaultKernel) {
+  const nn::Isa isa = GetParam();
+  const std::vector<float> w = random_vector(40 * 24, 3);
+  const GemmWeights packed = GemmWeights::pack(w.data(), 40, 24, isa);
+  EXPECT_EQ(packed.isa(), isa);
+  EXPECT_EQ(packed.n(), 40);
+  EXPECT_EQ(packed.k(), 24);
+  const std::string name = nn::gemm_kernel_name(isa);
+  EXPECT_EQ(name, nn::gemm_ukernel(packed.ukernel()).name);
+  EXPECT_EQ(name.rfind("gemm_f32_", 0), 0u) << name;
+  EXPECT_NE(name.find(nn::isa_name(isa)), std::string::npos) << name;
+  const int nr = nn::gemm_ukernel(packed.ukernel()).nr;
+  EXPECT_EQ(packed.bytes(), sizeof(float) * static_cast<std::size_t>((40 + nr - 1) / nr) * nr * 24);
+}
+
+// The epilogue activation is the same vector routine as apply_act: same bits.
+TEST_P(GemmIsaTest, EpilogueActivationMatchesApplyActBitwise) {
+  const nn::Isa isa = GetParam();
+  nntest::IsaScope scope(isa);
+  const int m = 45, n = 77, k = 40;
+  const std::vector<float> a = random_vector(static_cast<std::size_t>(m) * k, 21, -2.0f, 2.0f);
+  const std::vector<float> w = random_vector(static_cast<std::size_t>(n) * k, 22);
+  const std::vector<float> bias = random_vector(n, 23);
+  const GemmWeights packed = GemmWeights::pack(w.data(), n, k, isa);
+  for (Act act : kActs) {
+    SCOPED_TRACE(static_cast<int>(act));
+    GemmEpilogue plain;
+    plain.bias = bias.data();
+    GemmEpilogue fused = plain;
+    fused.act = act;
+    std::vector<float> x(static_cast<std::size_t>(m) * n), y(x.size());
+    nn::gemm(m, a.data(), k, packed, x.data(), n, plain);
+    nn::apply_act(act, x.data(), x.size());
+    nn::gemm(m, a.data(), k, packed, y.data(), n, fused);
+    expect_same_bits(x, y, "gemm epilogue vs apply_act");
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllIsas, GemmIsaTest, testing::ValuesIn(nntest::supported_isas()),
+                         nntest::isa_test_name);
+
+TEST(GemmErrors, BadShapesAndStridesThrow) {
+  const std::vector<float> w(64, 1.0f), a(64, 1.0f);
+  std::vector<float> c(64);
+  EXPECT_THROW(GemmWeights::pack(w.data(), 0, 4), nn::Error);
+  EXPECT_THROW(GemmWeights::pack(w.data(), 4, 0), nn::Error);
+  EXPECT_THROW(GemmWeights::pack(w.data(), -3, 4), nn::Error);
+  EXPECT_THROW(GemmWeights::pack(nullptr, 4, 4), nn::Error);
+  EXPECT_THROW(GemmWeights::pack_for_ukernel(w.data(), 4, 4, -1), nn::Error);
+  EXPECT_THROW(GemmWeights::pack_for_ukernel(w.data(), 4, 4, nn::gemm_ukernel_count()), nn::Error);
+  const GemmWeights empty;
+  EXPECT_THROW(nn::gemm(1, a.data(), 4, empty, c.data(), 4), nn::Error);
+  const GemmWeights packed = GemmWeights::pack(w.data(), 4, 8);
+  EXPECT_THROW(nn::gemm(2, a.data(), 7, packed, c.data(), 4), nn::Error);   // lda < K
+  EXPECT_THROW(nn::gemm(2, a.data(), 8, packed, c.data(), 3), nn::Error);   // ldc < N
+  EXPECT_THROW(nn::gemm(-1, a.data(), 8, packed, c.data(), 4), nn::Error);
+  GemmEpilogue ep;
+  ep.residual = c.data();
+  ep.ldr = 2;
+  EXPECT_THROW(nn::gemm(2, a.data(), 8, packed, c.data(), 4, ep), nn::Error);  // ldr < N
+  EXPECT_THROW(nn::gemm_parallel(2, a.data(), 8, packed, c.data(), 3), nn::Error);
+  GemmEpilogue bad_act;
+  bad_act.act = static_cast<Act>(17);
+  EXPECT_THROW(nn::gemm(2, a.data(), 8, packed, c.data(), 4, bad_act), nn::Error);
+  EXPECT_NO_THROW(nn::gemm(0, a.data(), 8, packed, c.data(), 4));
+}
+
+TEST(GemmRef, SmallProductByHand) {
+  // A [2 x 3], W [2 x 3]: C = A W^T, then bias, ReLU, scale, residual.
+  const float a[] = {1, 2, 3, -1, 0.5f, 2};
+  const float w[] = {1, 0, -1, 2, 1, 0.5f};
+  const float bias[] = {0.5f, -1};
+  const float scale[] = {2, 3};
+  const float res[] = {10, 20, 30, 40};
+  float c[4];
+  GemmEpilogue ep;
+  ep.bias = bias;
+  ep.act = Act::Relu;
+  ep.scale = scale;
+  ep.residual = res;
+  ep.ldr = 2;
+  nn::gemm_ref(2, 2, 3, a, 3, w, c, 2, ep);
+  // raw: [1-3, 2+2+1.5; -1-2, -2+0.5+1] = [-2, 5.5; -3, -0.5]
+  EXPECT_FLOAT_EQ(c[0], 10.0f);             // relu(-1.5) * 2 + 10
+  EXPECT_FLOAT_EQ(c[1], 4.5f * 3 + 20);     // relu(4.5) * 3 + 20
+  EXPECT_FLOAT_EQ(c[2], 30.0f);             // relu(-2.5) * 2 + 30
+  EXPECT_FLOAT_EQ(c[3], 40.0f);             // relu(-1.5) * 3 + 40
+  ep.act_after_residual = true;
+  ep.act = Act::Relu;
+  const float neg_res[] = {-10, 0, 0, 0};
+  ep.residual = neg_res;
+  nn::gemm_ref(2, 2, 3, a, 3, w, c, 2, ep);
+  EXPECT_FLOAT_EQ(c[0], 0.0f);              // relu(-1.5 * 2 - 10)
+  EXPECT_FLOAT_EQ(c[1], 4.5f * 3);
+}
+
+}  // namespace

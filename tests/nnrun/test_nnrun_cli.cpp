@@ -1,0 +1,267 @@
+// nnrun as users drive it: every malformed input gives a one-line error naming the
+// file and the problem, exit code 1, and leaves no output file behind.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "nn/models/convnext.h"
+#include "nn/models/synthetic_weights.h"
+#include "weights/safetensors.h"
+
+namespace {
+
+// A small ConvNeXt (odd widths) so the tests are quick.
+nn::ConvNeXtConfig small_config() { return {{8, 12, 20, 28}, {1, 1, 2, 1}}; }
+
+struct Result {
+  int code = -1;
+  std::string err, out;
+};
+
+class NnrunCli : public testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/nnrun_test_XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    dir_ = tmpl;
+    good_weights_ = nn::synthetic_weights(nn::convnext_tensor_specs(small_config(), "features."), 3).bytes();
+    write("w.safetensors", good_weights_);
+    write_input("x.safetensors", {1, 3, 64, 96});
+  }
+  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+
+  std::string path(const std::string& f) const { return dir_ + "/" + f; }
+  void write(const std::string& f, const std::vector<std::uint8_t>& bytes) {
+    std::ofstream(path(f), std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+  void write_input(const std::string& f, std::vector<std::int64_t> shape, float fill = 0.5f) {
+    std::size_t n = 1;
+    for (auto d : shape) n *= static_cast<std::size_t>(d);
+    std::vector<float> v(n, fill);
+    weights::Writer w;
+    w.add_f32("input", shape, v.data());
+    w.write(path(f));
+  }
+  Result run(const std::string& weights, const std::string& input, const std::string& extra = "") {
+    const std::string cmd = std::string(NNRUN_PATH) + " --model convnext --weights " + path(weights) + " --input " +
+                            path(input) + " --output " + path("y.safetensors") + " --threads 2 " + extra +
+                            " >" + path("stdout") + " 2>" + path("stderr");
+    Result r;
+    int status = std::system(cmd.c_str());
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::stringstream e, o;
+    e << std::ifstream(path("stderr")).rdbuf();
+    o << std::ifstream(path("stdout")).rdbuf();
+    r.err = e.str();
+    r.out = o.str();
+    return r;
+  }
+  bool output_exists() const { return std::ifstream(path("y.safetensors")).good(); }
+
+  // Runs with bad weights and checks the error contract.
+  void expect_weights_error(const std::vector<std::uint8_t>& bytes, const std::string& problem) {
+    write("bad.safetensors", bytes);
+    Result r = run("bad.safetensors", "x.safetensors");
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_NE(r.err.find(path("bad.safetensors")), std::string::npos) << "error must name the file: " << r.err;
+    EXPECT_NE(r.err.find(problem), std::string::npos) << "expected '" << problem << "' in: " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+    EXPECT_FALSE(output_exists());
+  }
+
+  // The header JSON of the good weights file, for targeted edits.
+  std::string header() const {
+    std::uint64_t n = 0;
+    std::memcpy(&n, good_weights_.data(), 8);
+    return std::string(good_weights_.begin() + 8, good_weights_.begin() + 8 + n);
+  }
+  std::vector<std::uint8_t> with_header(const std::string& h) const {
+    std::uint64_t n0 = 0;
+    std::memcpy(&n0, good_weights_.data(), 8);
+    std::vector<std::uint8_t> out(8);
+    std::uint64_t n = h.size();
+    std::memcpy(out.data(), &n, 8);
+    out.insert(out.end(), h.begin(), h.end());
+    out.insert(out.end(), good_weights_.begin() + 8 + n0, good_weights_.end());
+    return out;
+  }
+  // Replaces the first occurrence of `from` in the header (keeping its length).
+  std::vector<std::uint8_t> edit_header(const std::string& from, const std::string& to) const {
+    std::string h = header();
+    auto pos = h.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    h.replace(pos, from.size(), to);
+    return with_header(h);
+  }
+
+  std::string dir_;
+  std::vector<std::uint8_t> good_weights_;
+};
+
+TEST_F(NnrunCli, RunsAndWritesFeaturesWithTiming) {
+  Result r = run("w.safetensors", "x.safetensors", "--repeat 2 --profile");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto y = weights::SafeTensors::load(path("y.safetensors"));
+  EXPECT_EQ(y.info("features").shape, (std::vector<std::int64_t>{1, 28, 2, 3}));
+  for (float v : y.f32("features")) EXPECT_TRUE(std::isfinite(v));
+  // The last line is the timing summary; the profile table names the layers.
+  const std::string last = r.out.substr(r.out.rfind("forward_ms"));
+  EXPECT_EQ(last.rfind("forward_ms min=", 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("features.5.1"), std::string::npos) << r.out;
+}
+
+TEST_F(NnrunCli, SameOutputForOneAndTwoThreads) {
+  ASSERT_EQ(run("w.safetensors", "x.safetensors", "--threads 1").code, 0);
+  auto a = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+  ASSERT_EQ(run("w.safetensors", "x.safetensors").code, 0);
+  auto b = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+}
+
+TEST_F(NnrunCli, TruncatedFile) {
+  expect_weights_error({good_weights_.begin(), good_weights_.begin() + 5}, "");
+  expect_weights_error({good_weights_.begin(), good_weights_.end() - 100}, "");
+}
+
+TEST_F(NnrunCli, HeaderLengthPastTheEnd) {
+  auto bytes = good_weights_;
+  std::uint64_t n = bytes.size() + 10;
+  std::memcpy(bytes.data(), &n, 8);
+  expect_weights_error(bytes, "header length");
+}
+
+TEST_F(NnrunCli, InvalidJson) {
+  std::string h = header();
+  h[h.size() / 2] = '#';
+  expect_weights_error(with_header(h), "");
+}
+
+TEST_F(NnrunCli, DuplicateKey) {
+  std::string h = header();
+  // Repeat the first member: {"a":...,  ->  {"a":...,"a":...,
+  const auto end_first = h.find("},") + 2;
+  h = "{" + h.substr(1, end_first - 1) + h.substr(1);
+  expect_weights_error(with_header(h), "duplicate");
+}
+
+TEST_F(NnrunCli, UnknownDtype) { expect_weights_error(edit_header("\"F32\"", "\"X32\""), "dtype"); }
+
+TEST_F(NnrunCli, OverlappingOrGappedOffsets) {
+  // Shifting one tensor's start makes it overlap its predecessor or leave a gap.
+  std::string h = header();
+  auto pos = h.find("\"data_offsets\":[", h.find("features.0.0.bias"));
+  ASSERT_NE(pos, std::string::npos);
+  pos += 16;
+  auto comma = h.find(',', pos);
+  std::uint64_t begin = std::stoull(h.substr(pos, comma - pos));
+  std::string down = h, up = h;
+  down.replace(pos, comma - pos, std::to_string(begin - 4));
+  up.replace(pos, comma - pos, std::to_string(begin + 4));
+  expect_weights_error(with_header(down), "");
+  expect_weights_error(with_header(up), "");
+}
+
+TEST_F(NnrunCli, MissingTensor) {
+  auto specs = nn::convnext_tensor_specs(small_config(), "features.");
+  auto it = std::find_if(specs.begin(), specs.end(), [](auto& s) { return s.name == "features.3.0.block.3.weight"; });
+  specs.erase(it);
+  expect_weights_error(nn::synthetic_weights(specs, 3).bytes(), "features.3.0.block.3.weight");
+}
+
+TEST_F(NnrunCli, WrongShape) {
+  auto specs = nn::convnext_tensor_specs(small_config(), "features.");
+  for (auto& s : specs)
+    if (s.name == "features.1.0.block.0.weight") s.shape = {8, 1, 5, 5};
+  expect_weights_error(nn::synthetic_weights(specs, 3).bytes(), "features.1.0.block.0.weight");
+}
+
+TEST_F(NnrunCli, NanOrInfInAWeight) {
+  for (float bad : {NAN, INFINITY}) {
+    auto specs = nn::convnext_tensor_specs(small_config(), "features.");
+    weights::Writer w;
+    nn::SplitMix64 rng(1);
+    for (const auto& s : specs) {
+      auto v = nn::synthetic_tensor(s, specs, rng);
+      if (s.name == "features.5.1.block.5.bias") v[3] = bad;
+      w.add_f32(s.name, s.shape, v.data());
+    }
+    expect_weights_error(w.bytes(), "features.5.1.block.5.bias");
+  }
+}
+
+void expect_input_error(NnrunCli* t, const Result& r, const std::string& file, const std::string& problem) {
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(problem), std::string::npos) << "expected '" << problem << "' in: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  (void)t;
+}
+
+TEST_F(NnrunCli, InputOfWrongRank) {
+  write_input("bad.safetensors", {3, 64, 96});
+  Result r = run("w.safetensors", "bad.safetensors");
+  expect_input_error(this, r, path("bad.safetensors"), "rank");
+  EXPECT_FALSE(output_exists());
+}
+
+TEST_F(NnrunCli, InputWithWrongChannelCount) {
+  write_input("bad.safetensors", {1, 4, 64, 96});
+  Result r = run("w.safetensors", "bad.safetensors");
+  expect_input_error(this, r, path("bad.safetensors"), "channels");
+  EXPECT_FALSE(output_exists());
+}
+
+TEST_F(NnrunCli, InputSmallerThan32x32) {
+  write_input("bad.safetensors", {1, 3, 31, 96});
+  Result r = run("w.safetensors", "bad.safetensors");
+  expect_input_error(this, r, path("bad.safetensors"), "32x32");
+  EXPECT_FALSE(output_exists());
+}
+
+TEST_F(NnrunCli, MissingInputFileAndUsageErrors) {
+  Result r = run("w.safetensors", "nope.safetensors");
+  expect_input_error(this, r, path("nope.safetensors"), "");
+  EXPECT_FALSE(output_exists());
+  r = run("w.safetensors", "x.safetensors", "--repeat -1");
+  EXPECT_EQ(r.code, 2) << r.err;
+}
+
+TEST_F(NnrunCli, WrongNamedModelIsRefused) {
+  const std::string cmd = std::string(NNRUN_PATH) + " --model convnext_tiny --weights " + path("w.safetensors") +
+                          " --input " + path("x.safetensors") + " --output " + path("y.safetensors") + " 2>" +
+                          path("stderr");
+  int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  std::stringstream e;
+  e << std::ifstream(path("stderr")).rdbuf();
+  EXPECT_NE(e.str().find("not convnext_tiny"), std::string::npos) << e.str();
+  EXPECT_FALSE(output_exists());
+}
+
+TEST_F(NnrunCli, UnusedTensorsAreListed) {
+  auto specs = nn::convnext_tensor_specs(small_config(), "features.");
+  specs.push_back({"classifier.2.weight", {10, 28}});
+  write("extra.safetensors", nn::synthetic_weights(specs, 3).bytes());
+  Result r = run("extra.safetensors", "x.safetensors");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("classifier.2.weight"), std::string::npos) << r.err;
+}
+
+TEST_F(NnrunCli, HelpListsModels) {
+  const std::string cmd = std::string(NNRUN_PATH) + " --help >" + path("stdout");
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::stringstream o;
+  o << std::ifstream(path("stdout")).rdbuf();
+  EXPECT_NE(o.str().find("convnext_tiny"), std::string::npos);
+  EXPECT_NE(o.str().find("--repeat"), std::string::npos);
+}
+
+}  // namespace

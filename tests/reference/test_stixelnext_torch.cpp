@@ -1,0 +1,96 @@
+// StixelNExT++ (backbone + every head variant) against a PyTorch implementation of
+// the reference specification (stixel_head_ref.py). The prediction is a sigmoid
+// output, compared with an absolute tolerance of 1e-5.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "nn/error.h"
+#include "nn/models/stixelnext.h"
+#include "nn/threads.h"
+#include "tests/reference/torch_ref.h"
+
+namespace {
+
+constexpr double kTol = 1e-5;
+
+void check(const std::string& variant, const std::string& size, nn::StixelHeadVariant expect,
+           std::optional<nn::StixelHeadVariant> force = std::nullopt) {
+  weights::SafeTensors w = reftest::load_ref("stixel_" + variant + "_weights.safetensors");
+  weights::SafeTensors c = reftest::load_ref("stixel_case_" + variant + "_" + size + ".safetensors");
+  nn::StixelNExT model(w, force);
+  EXPECT_EQ(model.head().variant(), expect);
+  const auto& xs = c.info("input").shape;
+  const auto& es = c.info("expected").shape;
+  model.plan(static_cast<int>(xs[0]), static_cast<int>(xs[2]), static_cast<int>(xs[3]), static_cast<int>(es[3]));
+  ASSERT_EQ(model.prediction_shape(), es);
+  const auto x = c.f32("input");
+  const float* y = model.forward(x.data());
+  reftest::expect_close_abs(y, c.f32("expected"), kTol, variant + " " + size);
+}
+
+using V = nn::StixelHeadVariant;
+
+TEST(StixelNExTTorch, V4Small) { check("v4", "small", V::V4); }
+TEST(StixelNExTTorch, V1LocalAttentionSmall) { check("v1", "small", V::V1); }
+TEST(StixelNExTTorch, V3GlobalAttentionSmall) { check("v3", "small", V::V3, V::V3); }
+TEST(StixelNExTTorch, V2UnusedAttentionSmall) { check("v2", "small", V::V2); }
+TEST(StixelNExTTorch, V0PlainSmall) { check("v0", "small", V::V0); }
+TEST(StixelNExTTorch, V4FullHd) { check("v4", "fullhd", V::V4); }
+TEST(StixelNExTTorch, V1FullHd) { check("v1", "fullhd", V::V1); }
+TEST(StixelNExTTorch, V3FullHd) { check("v3", "fullhd", V::V3, V::V3); }
+TEST(StixelNExTTorch, V0FullHd) { check("v0", "fullhd", V::V0); }
+
+// V1 and V3 share their tensors: detection says V1, and forcing V3 changes the result.
+TEST(StixelNExTTorch, V1AndV3DifferOnlyByTheForcedVariant) {
+  weights::SafeTensors w = reftest::load_ref("stixel_v1_weights.safetensors");
+  weights::SafeTensors c = reftest::load_ref("stixel_case_v1_small.safetensors");
+  nn::StixelNExT local(w), global(w, V::V3);
+  const auto x = c.f32("input");
+  local.plan(1, 256, 640, 80);
+  global.plan(1, 256, 640, 80);
+  const std::size_t n = 3 * 64 * 80;
+  std::vector<float> a(local.forward(x.data()), local.forward(x.data()) + n);
+  const float* b = global.forward(x.data());
+  EXPECT_NE(0, std::memcmp(a.data(), b, n * sizeof(float)));
+}
+
+TEST(StixelNExTTorch, UnknownHeadLayoutNamesWhatItExpects) {
+  weights::SafeTensors full = reftest::load_ref("stixel_v4_weights.safetensors");
+  weights::Writer wr;
+  for (const auto& name : full.names())
+    if (name.rfind("classifier.", 0) != 0 || name.find("shared_reduce") != std::string::npos) {
+      auto v = full.f32(name);
+      wr.add_f32(name == "classifier.shared_reduce.weight" ? "classifier.mystery.weight" : name,
+                 full.info(name).shape, v.data());
+    }
+  weights::SafeTensors st = weights::SafeTensors::from_bytes(wr.bytes(), "odd.safetensors");
+  try {
+    nn::StixelNExT model(st);
+    FAIL() << "expected an error";
+  } catch (const weights::Error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("odd.safetensors"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("unknown stixel head"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("classifier.local_mixing.depthwise.weight"), std::string::npos) << msg;
+  }
+}
+
+TEST(StixelNExTTorch, DeterministicAcrossThreadCounts) {
+  weights::SafeTensors w = reftest::load_ref("stixel_v4_weights.safetensors");
+  weights::SafeTensors c = reftest::load_ref("stixel_case_v4_small.safetensors");
+  const auto x = c.f32("input");
+  const std::size_t n = 4 * 64 * 80;
+  nn::set_num_threads(1);
+  nn::StixelNExT one(w);
+  one.plan(1, 256, 640, 80);
+  std::vector<float> a(one.forward(x.data()), one.forward(x.data()) + n);
+  nn::set_num_threads(2);
+  nn::StixelNExT two(w);
+  two.plan(1, 256, 640, 80);
+  const float* b = two.forward(x.data());
+  nn::set_num_threads(0);
+  EXPECT_EQ(0, std::memcmp(a.data(), b, n * sizeof(float)));
+}
+
+}  // namespace

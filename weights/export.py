@@ -1,0 +1,195 @@
+#!/usr/bin/python3
+"""Convert a PyTorch checkpoint into a safetensors file for roadnn.
+
+Runs with /usr/bin/python3 using torch and the standard library only (no
+`safetensors` package). Accepted checkpoint forms: a bare state_dict,
+{"model_state_dict": ...}, {"state_dict": ...}, {"model": ...} and a pickled
+nn.Module. A DataParallel/DDP "module." prefix is stripped, BatchNorm
+num_batches_tracked counters are dropped, other non-float tensors are skipped
+with a warning, and float tensors are stored contiguous in the chosen dtype.
+"""
+
+import argparse
+import os
+import sys
+
+PROG = "export.py"
+TORCH_HINT = "install python3-torch (apt-get install python3-torch)"
+FORMAT = "roadnn-v1"
+RESERVED_METADATA = ("format", "source")
+WRAPPER_KEYS = ("model_state_dict", "state_dict", "model")
+
+
+class ExportError(Exception):
+    """A problem to report as one line, exit code 1."""
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Convert a PyTorch checkpoint (bare state_dict, {'model_state_dict': ...}, "
+        "{'state_dict': ...}, {'model': ...} or a pickled nn.Module) into safetensors for roadnn.",
+        epilog="Security: checkpoints are Python pickles and are loaded with "
+        "torch.load(weights_only=False), which can run arbitrary code. Only convert checkpoints "
+        "you trust. Output metadata always has format=%s and source=<checkpoint file name>."
+        % FORMAT,
+    )
+    parser.add_argument("checkpoint", metavar="CHECKPOINT", help="PyTorch checkpoint (.pt/.pth)")
+    parser.add_argument("out", metavar="OUT.safetensors", help="output file (written atomically)")
+    parser.add_argument("--metadata", metavar="KEY=VALUE", nargs="+", action="extend", default=[],
+                        help="extra __metadata__ entries (repeatable)")
+    parser.add_argument("--dtype", choices=("f32", "f16", "bf16"), default="f32",
+                        help="storage type of the float tensors (default: f32)")
+    return parser.parse_args(argv)
+
+
+def parse_metadata(items):
+    metadata = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ExportError(f"--metadata expects KEY=VALUE, got '{item}'")
+        if key in RESERVED_METADATA:
+            raise ExportError(f"--metadata key '{key}' is reserved (set automatically)")
+        if key in metadata:
+            raise ExportError(f"--metadata key '{key}' given twice")
+        metadata[key] = value
+    return metadata
+
+
+def first_line(exc):
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def load_checkpoint(torch, path):
+    if not os.path.exists(path):
+        raise ExportError(f"{path}: no such file")
+    if os.path.isdir(path):
+        raise ExportError(f"{path}: is a directory, expected a checkpoint file")
+    try:
+        try:
+            return torch.load(path, map_location="cpu", weights_only=False)
+        except TypeError as e:
+            if "weights_only" not in str(e):
+                raise
+            return torch.load(path, map_location="cpu")  # torch < 1.13
+    except Exception as e:  # torch/pickle raise many unrelated types for bad files
+        hint = ""
+        if isinstance(e, AttributeError) and "Can't get attribute" in str(e):
+            hint = "; a pickled nn.Module needs its class importable, save its state_dict() instead"
+        raise ExportError(f"{path}: cannot load checkpoint ({first_line(e)}){hint}") from e
+
+
+def is_state_dict(torch, obj):
+    from collections.abc import Mapping
+
+    return isinstance(obj, Mapping) and len(obj) > 0 and all(
+        isinstance(v, torch.Tensor) for v in obj.values())
+
+
+def find_state_dict(torch, obj, path):
+    """The name -> tensor mapping inside a checkpoint, and a word on its form."""
+    from collections.abc import Mapping
+
+    if isinstance(obj, torch.nn.Module):
+        return obj.state_dict(), "pickled nn.Module"
+    if isinstance(obj, Mapping):
+        for key in WRAPPER_KEYS:
+            inner = obj.get(key)
+            if isinstance(inner, torch.nn.Module):
+                return inner.state_dict(), f"pickled nn.Module under '{key}'"
+            if is_state_dict(torch, inner):
+                return inner, f"'{key}'"
+        if is_state_dict(torch, obj):
+            return obj, "bare state_dict"
+        if not obj:
+            raise ExportError(f"{path}: the checkpoint is an empty dict")
+        keys = ", ".join(repr(k) for k in list(obj)[:10]) + (", ..." if len(obj) > 10 else "")
+        raise ExportError(f"{path}: no state dict found (expected a state_dict, "
+                          f"{{'model_state_dict': ...}}, {{'state_dict': ...}} or a pickled nn.Module; "
+                          f"top-level keys: {keys})")
+    raise ExportError(f"{path}: unsupported checkpoint content: {type(obj).__name__} "
+                      "(expected a state_dict or a pickled nn.Module)")
+
+
+def select_tensors(torch, state, dtype, path):
+    """Float tensors converted to `dtype`; returns (tensors, skipped descriptions)."""
+    names = list(state.keys())
+    for name in names:
+        if not isinstance(name, str):
+            raise ExportError(f"{path}: state dict key {name!r} is not a string")
+    # DataParallel/DDP prefix every key; strip only then, so a submodule that
+    # happens to be called "module" keeps its name.
+    strip = all(n.startswith("module.") for n in names)
+    tensors = {}
+    skipped = []
+    for name in names:
+        value = state[name]
+        out_name = name[len("module."):] if strip else name
+        if out_name == "num_batches_tracked" or out_name.endswith(".num_batches_tracked"):
+            continue
+        if not isinstance(value, torch.Tensor):
+            skipped.append(f"{out_name} ({type(value).__name__})")
+            continue
+        if not value.is_floating_point():
+            skipped.append(f"{out_name} ({str(value.dtype).replace('torch.', '')})")
+            continue
+        try:
+            converted = value.detach().to(device="cpu", dtype=dtype).contiguous()
+        except Exception as e:
+            raise ExportError(f"{path}: tensor '{out_name}': cannot convert ({first_line(e)})") from e
+        if not bool(torch.isfinite(converted).all()):
+            if bool(torch.isfinite(value).all()):
+                raise ExportError(f"{path}: tensor '{out_name}' has values outside the range of "
+                                  f"{str(dtype).replace('torch.', '')}")
+            raise ExportError(f"{path}: tensor '{out_name}' contains NaN or Inf")
+        if out_name in tensors:
+            raise ExportError(f"{path}: two tensors named '{out_name}' after stripping 'module.'")
+        tensors[out_name] = converted
+    return tensors, skipped
+
+
+def export(args):
+    metadata = parse_metadata(args.metadata)
+    try:
+        import torch
+    except ImportError as e:
+        raise ExportError(TORCH_HINT) from e
+    here = os.path.dirname(os.path.abspath(__file__))
+    if here not in sys.path:
+        sys.path.insert(0, here)
+    import safetensors_io
+
+    dtype = {"f32": torch.float32, "f16": torch.float16, "bf16": torch.bfloat16}[args.dtype]
+    obj = load_checkpoint(torch, args.checkpoint)
+    state, form = find_state_dict(torch, obj, args.checkpoint)
+    tensors, skipped = select_tensors(torch, state, dtype, args.checkpoint)
+    if skipped:
+        print(f"{PROG}: warning: skipped {len(skipped)} non-float tensor(s): " + ", ".join(skipped),
+              file=sys.stderr)
+    if not tensors:
+        raise ExportError(f"{args.checkpoint}: no float tensors to export")
+    metadata.update({"format": FORMAT, "source": os.path.basename(args.checkpoint)})
+    try:
+        safetensors_io.save(args.out, tensors, metadata)
+    except OSError as e:
+        raise ExportError(f"{args.out}: cannot write ({e.strerror or first_line(e)})") from e
+    except safetensors_io.SafetensorsError as e:
+        raise ExportError(f"{args.out}: {e}") from e
+    nbytes = sum(t.numel() * t.element_size() for t in tensors.values())
+    print(f"wrote {args.out}: {len(tensors)} tensors ({args.dtype}, {nbytes} bytes) from {form}")
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    try:
+        export(args)
+    except ExportError as e:
+        print(f"{PROG}: {e}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,202 @@
+#include "weights/file_io.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <system_error>
+
+#ifdef __unix__
+#include <unistd.h>
+#endif
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
+
+namespace weights {
+namespace {
+
+std::string errno_text(int err) { return std::generic_category().message(err); }
+
+struct FileCloser {
+  std::FILE* f;
+  ~FileCloser() {
+    if (f) std::fclose(f);
+  }
+};
+
+// A name no other writer in this or another process picks: pid plus a counter.
+std::string temporary_name(const std::string& path, unsigned attempt) {
+  static std::atomic<unsigned> counter{0};
+  std::string name = path + ".tmp";
+#ifdef __unix__
+  name += "-" + std::to_string(static_cast<long long>(::getpid()));
+#endif
+  name += "-" + std::to_string(counter.fetch_add(1)) + "-" + std::to_string(attempt);
+  return name;
+}
+
+}  // namespace
+
+FileBuffer::FileBuffer(std::vector<std::uint8_t> bytes)
+    : vec_(std::move(bytes)), data_(vec_.data()), size_(vec_.size()) {}
+
+FileBuffer FileBuffer::uninitialized(std::size_t size) {
+  FileBuffer b;
+#ifdef __linux__
+  constexpr std::size_t kHugePage = 2u << 20;
+  if (size >= 2 * kHugePage) {
+    std::size_t bytes = (size + kHugePage - 1) / kHugePage * kHugePage;
+    void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p != MAP_FAILED) {
+      ::madvise(p, bytes, MADV_HUGEPAGE);  // advice only: failure just means 4 KiB pages
+      b.data_ = static_cast<std::uint8_t*>(p);
+      b.size_ = size;
+      b.mapped_bytes_ = bytes;
+      return b;
+    }
+  }
+#endif
+  b.vec_.resize(size);
+  b.data_ = b.vec_.data();
+  b.size_ = size;
+  return b;
+}
+
+FileBuffer::FileBuffer(FileBuffer&& o) noexcept
+    : vec_(std::move(o.vec_)), data_(o.data_), size_(o.size_), mapped_bytes_(o.mapped_bytes_) {
+  o.data_ = nullptr;
+  o.size_ = 0;
+  o.mapped_bytes_ = 0;
+}
+
+FileBuffer& FileBuffer::operator=(FileBuffer&& o) noexcept {
+  if (this != &o) {
+    release();
+    vec_ = std::move(o.vec_);
+    data_ = o.data_;
+    size_ = o.size_;
+    mapped_bytes_ = o.mapped_bytes_;
+    o.data_ = nullptr;
+    o.size_ = 0;
+    o.mapped_bytes_ = 0;
+  }
+  return *this;
+}
+
+FileBuffer::~FileBuffer() { release(); }
+
+void FileBuffer::release() noexcept {
+#ifdef __linux__
+  if (mapped_bytes_) ::munmap(data_, mapped_bytes_);
+#endif
+  vec_ = std::vector<std::uint8_t>();
+  data_ = nullptr;
+  size_ = 0;
+  mapped_bytes_ = 0;
+}
+
+void FileBuffer::truncate(std::size_t size) {
+  if (size < size_) size_ = size;
+}
+
+namespace {
+
+std::string read_open_file(std::FILE* f, std::uint64_t hint, std::uint64_t max_bytes,
+                           FileBuffer* out) {
+  // One byte beyond the expected size, so reaching end of file is seen without
+  // a second buffer in the common case.
+  FileBuffer buf = FileBuffer::uninitialized(static_cast<std::size_t>(hint) + 1);
+  std::size_t used = 0;
+  for (;;) {
+    std::size_t got = std::fread(buf.data() + used, 1, buf.size() - used, f);
+    used += got;
+    if (used > max_bytes) {
+      return "file is larger than the limit of " + std::to_string(max_bytes) + " bytes";
+    }
+    if (used < buf.size()) {
+      if (std::ferror(f)) return "read error (" + errno_text(errno) + ")";
+      if (std::feof(f)) break;
+      continue;
+    }
+    std::uint64_t grown = std::max<std::uint64_t>(static_cast<std::uint64_t>(buf.size()) * 2, 4096);
+    FileBuffer bigger = FileBuffer::uninitialized(
+        static_cast<std::size_t>(std::min<std::uint64_t>(grown, max_bytes + 1)));
+    std::memcpy(bigger.data(), buf.data(), used);
+    buf = std::move(bigger);
+  }
+  buf.truncate(used);
+  *out = std::move(buf);
+  return "";
+}
+
+}  // namespace
+
+std::string read_file(const std::string& path, std::uint64_t max_bytes, FileBuffer* out) {
+  *out = FileBuffer();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return "is a directory, expected a file";
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return "cannot open (" + errno_text(errno) + ")";
+  FileCloser closer{f};
+
+  // The size is only a hint for the first allocation; the read loop below is
+  // what enforces the limit (the file may change, or be a pipe).
+  std::uint64_t hint = 0;
+  if (std::filesystem::is_regular_file(path, ec)) {
+    std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec) hint = size;
+  }
+  if (hint > max_bytes) {
+    return "file is " + std::to_string(hint) + " bytes, larger than the limit of " +
+           std::to_string(max_bytes) + " bytes";
+  }
+  try {
+    return read_open_file(f, hint, max_bytes, out);
+  } catch (const std::bad_alloc&) {
+    return "not enough memory to read it (" + std::to_string(hint) + " bytes)";
+  }
+}
+
+
+std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces) {
+  std::string tmp;
+  std::FILE* f = nullptr;
+  for (unsigned attempt = 0; attempt < 100 && !f; ++attempt) {
+    tmp = temporary_name(path, attempt);
+    // "x": fail rather than reuse a name someone else is writing.
+    f = std::fopen(tmp.c_str(), "wbx");
+    if (!f && errno != EEXIST) {
+      return "cannot create temporary file '" + tmp + "' (" + errno_text(errno) + ")";
+    }
+  }
+  if (!f) return "cannot create a temporary file next to it (all names taken)";
+
+  auto fail = [&](const std::string& what, int err) {
+    if (f) std::fclose(f);
+    std::remove(tmp.c_str());
+    return what + " (" + errno_text(err) + ")";
+  };
+  for (const ByteSpan& piece : pieces) {
+    if (piece.size == 0) continue;
+    if (std::fwrite(piece.data, 1, piece.size, f) != piece.size) return fail("write error", errno);
+  }
+  if (std::fflush(f) != 0) return fail("write error", errno);
+#ifdef __unix__
+  // Without this a crash soon after the rename could leave an empty file under
+  // the final name on some file systems.
+  if (::fsync(::fileno(f)) != 0) return fail("cannot flush to disk", errno);
+#endif
+  int closed = std::fclose(f);
+  f = nullptr;
+  if (closed != 0) return fail("write error", errno);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    return fail("cannot rename temporary file '" + tmp + "' into place", errno);
+  }
+  return "";
+}
+
+}  // namespace weights
