@@ -1,0 +1,63 @@
+#include "apps/stixelnext/calibration.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "weights/json.h"
+
+namespace stixelnext {
+
+namespace {
+
+std::vector<float> numbers(const json::Value& doc, const char* key, std::size_t count, const std::string& path) {
+  const json::Value* v = doc.get(key);
+  if (!v->is_array())
+    throw std::runtime_error(path + ": \"" + key + "\" must be an array of " + std::to_string(count) + " numbers");
+  if (v->array().size() != count)
+    throw std::runtime_error(path + ": \"" + key + "\" has " + std::to_string(v->array().size()) +
+                             " values, expected " + std::to_string(count) + " (row-major)");
+  std::vector<float> out;
+  for (const auto& x : v->array()) {
+    if (!x.is_number() || !std::isfinite(x.number()))
+      throw std::runtime_error(path + ": \"" + key + "\" holds a value that is not a finite number");
+    out.push_back(static_cast<float>(x.number()));
+  }
+  return out;
+}
+
+int positive_int(const json::Value& doc, const char* key, const std::string& path) {
+  const json::Value* v = doc.get(key);
+  if (!v) throw std::runtime_error(path + ": missing \"" + key + "\" (image size in pixels)");
+  if (!v->is_number() || v->number() != std::floor(v->number()) || v->number() < 1 || v->number() > 100000)
+    throw std::runtime_error(path + ": \"" + key + "\" must be a positive integer");
+  return static_cast<int>(v->number());
+}
+
+}  // namespace
+
+Calibration read_calibration(const std::string& path) {
+  json::Value doc;
+  try {
+    doc = json::parse_file(path);
+  } catch (const json::Error& e) {
+    throw std::runtime_error(e.what());
+  }
+  if (!doc.is_object()) throw std::runtime_error(path + ": expected a JSON object with K, T, width, height");
+  for (const auto& [key, value] : doc.object()) {
+    (void)value;
+    if (key != "K" && key != "T" && key != "width" && key != "height")
+      throw std::runtime_error(path + ": unknown key \"" + key + "\" (expected K, T, width, height)");
+  }
+  Calibration c;
+  if (!doc.get("K")) throw std::runtime_error(path + ": missing \"K\" (9 numbers, row-major)");
+  c.K = numbers(doc, "K", 9, path);
+  if (doc.get("T"))
+    c.T = numbers(doc, "T", 16, path);
+  else
+    c.T = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  c.width = positive_int(doc, "width", path);
+  c.height = positive_int(doc, "height", path);
+  return c;
+}
+
+}  // namespace stixelnext

@@ -1,0 +1,289 @@
+// stixelnext: images -> Stixel Worlds (pyStixel-lib .stx1, CSV or JSON), with
+// optional overlay and bird's-eye-view pictures and DBSCAN clustering.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <set>
+#include <string>
+#include <cerrno>
+#include <sys/stat.h>
+#include <vector>
+
+#include "apps/common/cli.h"
+#include "apps/common/image_io.h"
+#include "apps/stixelnext/calibration.h"
+#include "nn/isa.h"
+#include "nn/resize.h"
+#include "nn/threads.h"
+#include "stixel/clustering.h"
+#include "stixel/predictor.h"
+#include "stixel/projection.h"
+#include "stixel/render.h"
+#include "stixel/stx1.h"
+#include "stixel/text_formats.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+enum Stage { kDecode, kPreprocess, kNetwork, kExtraction, k3d, kClustering, kEncode, kStages };
+const char* kStageNames[kStages] = {"decode", "preprocess", "network", "extraction", "3D", "clustering", "encode"};
+
+struct StageTimer {
+  double ms[kStages] = {};
+  template <class F>
+  auto time(Stage s, F&& f) {
+    auto t0 = Clock::now();
+    struct Add {
+      double* slot;
+      Clock::time_point t0;
+      ~Add() { *slot += std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+    } add{&ms[s], t0};
+    return f();
+  }
+};
+
+std::string stem_of(const std::string& path) {
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  auto dot = name.find_last_of('.');
+  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+}
+
+// A UTF-8-safe name for the context and the output file.
+std::string clean_name(const std::string& stem) {
+  std::string out = stixel::is_valid_utf8(stem) ? stem : std::string();
+  if (out.empty())
+    for (unsigned char ch : stem) out += (ch >= 0x20 && ch < 0x7f) ? static_cast<char>(ch) : '_';
+  return out;
+}
+
+stixel::RgbImage background_at(const imageio::Image& img, int w, int h) {
+  stixel::RgbImage bg;
+  bg.width = w;
+  bg.height = h;
+  bg.pixels.resize(static_cast<std::size_t>(w) * h * 3);
+  if (img.width == w && img.height == h) {
+    bg.pixels = img.u8;
+    return bg;
+  }
+  std::vector<float> src(img.u8.begin(), img.u8.end()), dst(bg.pixels.size());
+  nn::resize_bilinear(nn::ConstTensorView(src.data(), {1, img.height, img.width, 3}), nn::TensorView{dst.data(), {1, h, w, 3}});
+  for (std::size_t i = 0; i < dst.size(); ++i)
+    bg.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(dst[i]), 0L, 255L));
+  return bg;
+}
+
+bool parse_size(const std::string& text, int* h, int* w) {
+  return std::sscanf(text.c_str(), "%dx%d", h, w) == 2 && *h >= 32 && *w >= 32 && *h <= 16384 && *w <= 16384;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string weights_path, calib_path, out_dir = "stixels", format = "stx1", head, anchors, norm, input_size,
+                                        cluster_axes = "0,2";
+  double threshold = 0.36, train_focal = 0;
+  int threads = 0, columns = 0, stixel_width = 0;
+  bool overlay = false, bev = false, cluster = false, profile = false, embed_image = false, quiet = false;
+  std::vector<std::string> images;
+
+  cli::Parser args("stixelnext", "--weights W.safetensors [options] IMAGE...",
+                   "StixelNExT++ on images: writes one Stixel World per image (pyStixel-lib .stx1 by default)\n"
+                   "to OUT_DIR/<image stem>.<format>, optionally with overlay and bird's-eye-view pictures.");
+  args.option("weights", "FILE", "StixelNExT++ weights (safetensors; features.* and classifier.* state_dict names)", &weights_path);
+  args.option("calib", "FILE", "calibration JSON {\"K\": [9], \"T\": [16, optional], \"width\": W, \"height\": H}", &calib_path);
+  args.option("threshold", "P", "keep candidates with probability >= P, in [0, 1] (default 0.36; 0 keeps all)", &threshold);
+  args.option("out-dir", "DIR", "output folder (default ./stixels, created if needed)", &out_dir);
+  args.option("format", "F", "stx1 (default), csv or json", &format);
+  args.flag("overlay", "also write <stem>_overlay.png: stixels on the image, far to near, RdYlGn by depth", &overlay);
+  args.flag("bev", "also write <stem>_bev.png: bird's-eye view (needs --calib)", &bev);
+  args.flag("cluster", "DBSCAN on the stixels' top points (eps 1.42 m, min_samples 2; needs --calib)", &cluster);
+  args.option("cluster-axes", "A,B", "the two 3D axes of the bird's-eye plane (default 0,2 = x,z for an optical-frame "
+              "calibration; 0,1 for Waymo vehicle-frame K/T)", &cluster_axes);
+  args.option("threads", "N", "threads (default: all cores)", &threads);
+  args.flag("profile", "print the network's per-layer time table", &profile);
+  args.option("head", "V", "force the head variant v0..v4 (default: detected; v1 and v3 share their tensors)", &head);
+  args.option("anchors", "SPEC", "depth anchors: tangent:4,66,64 (default) or linear:START,END,N", &anchors);
+  args.option("normalization", "MODE", "raw255 (default, as trained), unit (/255) or imagenet", &norm);
+  args.option("input-size", "HxW", "network input size (default 1280x1920 or the weights' metadata)", &input_size);
+  args.option("columns", "U", "output columns (default: input width / stixel width)", &columns);
+  args.option("stixel-width", "PX", "pixels per column (default 8)", &stixel_width);
+  args.option("train-focal", "F", "focal length (px) of the training camera: depths are scaled by f_camera / F", &train_focal);
+  args.flag("embed-image", "embed the (network-size) image as PNG in the .stx1, as pyStixel-lib's tools do", &embed_image);
+  args.flag("quiet", "no progress line", &quiet);
+  args.positionals("IMAGE...", "PNG or JPEG images", &images);
+  args.required("weights");
+  args.epilog("Settings default to the weights' __metadata__ (stixelnext.input_height/_width, columns, stixel_width,\n"
+              "anchors, normalization, head); flags override them. Images of another size are resized bilinearly\n"
+              "and K is scaled to match.\n\nexample:\n  stixelnext --weights stixelnext.safetensors --calib cam.json "
+              "--overlay --bev --cluster --out-dir out frame_*.png");
+  args.parse(argc, argv);
+  if (images.empty()) args.fail("no IMAGE given");
+  if (!(threshold >= 0 && threshold <= 1)) args.fail("--threshold must be in [0, 1]");
+  if (format != "stx1" && format != "csv" && format != "json") args.fail("--format must be stx1, csv or json");
+  if ((bev || cluster) && calib_path.empty()) args.fail("--bev and --cluster need --calib (3D needs the intrinsics)");
+  if (train_focal < 0 || (args.given("train-focal") && train_focal <= 0)) args.fail("--train-focal must be positive");
+  if (args.given("train-focal") && calib_path.empty()) args.fail("--train-focal needs --calib");
+  int axis_a = 0, axis_b = 2;
+  if (std::sscanf(cluster_axes.c_str(), "%d,%d", &axis_a, &axis_b) != 2 || axis_a < 0 || axis_a > 2 || axis_b < 0 ||
+      axis_b > 2 || axis_a == axis_b)
+    args.fail("--cluster-axes takes two different axes out of 0,1,2, e.g. 0,2");
+  nn::set_num_threads(threads);
+
+  std::unique_ptr<stixel::Predictor> predictor;
+  stixelnext::Calibration calib;
+  try {
+    weights::SafeTensors w = weights::SafeTensors::load(weights_path);
+    stixel::ModelSettings s = stixel::settings_from_metadata(w.metadata(), weights_path);
+    if (!head.empty()) {
+      nn::StixelHeadVariant v;
+      if (!nn::parse_stixel_head(head, &v)) args.fail("--head must be one of v0, v1, v2, v3, v4");
+      s.head = v;
+    }
+    if (!anchors.empty()) s.anchors = stixel::parse_anchor_spec(anchors, "--anchors");
+    if (!norm.empty() && !stixel::parse_normalization(norm, &s.normalization))
+      args.fail("--normalization must be raw255, unit or imagenet");
+    if (!input_size.empty() && !parse_size(input_size, &s.input_height, &s.input_width))
+      args.fail("--input-size takes HxW with both at least 32, e.g. 1280x1920");
+    if (args.given("stixel-width")) {
+      if (stixel_width < 1 || stixel_width > 1024) args.fail("--stixel-width must be in [1, 1024]");
+      s.stixel_width = stixel_width;
+    }
+    if (args.given("columns")) {
+      if (columns < 1 || columns > 16384) args.fail("--columns must be in [1, 16384]");
+      s.columns = columns;
+    }
+    predictor = std::make_unique<stixel::Predictor>(w, s);
+    std::set<std::string> used;
+    for (const auto& n : predictor->model().used_tensors()) used.insert(n);
+    std::vector<std::string> unused;
+    for (const auto& n : w.names())
+      if (!used.count(n)) unused.push_back(n);
+    if (!unused.empty())
+      std::fprintf(stderr, "stixelnext: warning: %s: %zu tensors are not used (first: %s)\n", weights_path.c_str(),
+                   unused.size(), unused[0].c_str());
+    if (!calib_path.empty()) {
+      calib = stixelnext::read_calibration(calib_path);
+      stixel::Projection check(calib.K, calib.T, calib_path);  // a singular K4 * T fails here, once
+    }
+    if (mkdir(out_dir.c_str(), 0777) != 0 && errno != EEXIST)
+      throw std::runtime_error(out_dir + ": cannot create the output folder");
+    const auto& st = predictor->settings();
+    if (!quiet)
+      std::fprintf(stderr, "stixelnext: head %s, input %dx%d, %d columns of %d px, anchors %s, %s input, kernels %s, %d threads\n",
+                   nn::stixel_head_name(predictor->model().head().variant()), st.input_height, st.input_width,
+                   st.effective_columns(), st.stixel_width, stixel::anchor_spec(st.anchors).c_str(),
+                   stixel::normalization_name(st.normalization), nn::isa_name(nn::active_isa()), nn::num_threads());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stixelnext: %s\n", e.what());
+    return 1;
+  }
+
+  const auto& settings = predictor->settings();
+  const int H = settings.input_height, W = settings.input_width;
+  StageTimer timer;
+  int failed = 0, done = 0;
+  bool told_resize = false;
+  predictor->model().profiler().set_enabled(profile);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const std::string& path = images[i];
+    try {
+      imageio::Image img = timer.time(kDecode, [&] { return imageio::load(path, 3); });
+      if (!calib_path.empty() && (img.width != calib.width || img.height != calib.height))
+        throw std::runtime_error(path + ": image is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                                 " but the calibration " + calib_path + " is for " + std::to_string(calib.width) + "x" +
+                                 std::to_string(calib.height));
+      const bool resized = timer.time(kPreprocess, [&] { return predictor->preprocess(img.u8.data(), img.width, img.height); });
+      if (resized && !told_resize) {
+        std::fprintf(stderr, "stixelnext: note: %dx%d images are resized to %dx%d (bilinear)%s\n", img.width, img.height,
+                     W, H, calib_path.empty() ? "" : " and K is scaled to match");
+        told_resize = true;
+      }
+      timer.time(kNetwork, [&] { return predictor->run_network(); });
+
+      std::vector<float> K;
+      std::unique_ptr<stixel::Projection> proj;
+      double depth_scale = 1.0;
+      if (!calib_path.empty()) {
+        K = stixel::scale_intrinsics(calib.K, img.width, img.height, W, H);
+        proj = std::make_unique<stixel::Projection>(K, calib.T, calib_path);
+        if (train_focal > 0) depth_scale = stixel::camera_depth_scale(K, train_focal, calib_path);
+      }
+      stixel::StixelWorld world = timer.time(kExtraction, [&] { return predictor->extract(threshold, depth_scale); });
+      const std::string name = clean_name(stem_of(path));
+      world.has_context = true;
+      world.context.name = name;
+      if (proj) {
+        world.context.has_calibration = true;
+        auto& c = world.context.calibration;
+        c.K = K;
+        c.T = calib.T;
+        c.width = W;
+        c.height = H;
+        c.channels = 3;
+        c.img_name = path.substr(path.find_last_of('/') + 1);
+        if (!stixel::is_valid_utf8(c.img_name)) c.img_name = name;
+      }
+      std::vector<stixel::Point3> top;
+      if (proj) top = timer.time(k3d, [&] { return stixel::top_points(world, *proj); });
+      if (cluster) {
+        stixel::ClusterOptions co;
+        co.axis_a = axis_a;
+        co.axis_b = axis_b;
+        timer.time(kClustering, [&] { stixel::cluster_stixels(world, top, co); return 0; });
+      }
+      stixel::RgbImage bg;
+      if (overlay || embed_image) bg = background_at(img, W, H);
+      timer.time(kEncode, [&] {
+        if (embed_image) world.image = imageio::encode_png(bg.pixels.data(), W, H, 3);
+        const std::string base = out_dir + "/" + name;
+        if (format == "stx1") {
+          auto bytes = stixel::encode_stx1(world);
+          imageio::write_file_atomic(base + ".stx1", bytes.data(), bytes.size());
+        } else {
+          const std::string text = format == "csv" ? stixel::to_csv(world, {path, false}) : stixel::to_json(world);
+          imageio::write_file_atomic(base + "." + format, text.data(), text.size());
+        }
+        if (overlay) {
+          stixel::OverlayOptions oo;
+          oo.min_confidence = threshold;
+          oo.color_by_cluster = cluster;
+          auto pic = stixel::render_overlay(world, bg, oo);
+          imageio::save_png(base + "_overlay.png", pic.pixels.data(), pic.width, pic.height, 3);
+        }
+        if (bev) {
+          stixel::BevOptions bo;
+          bo.min_confidence = threshold;
+          bo.lateral_axis = axis_a;
+          bo.forward_axis = axis_b;
+          if (cluster) bo.color = stixel::BevOptions::Color::Cluster;
+          auto pic = stixel::render_bev(world, *proj, bo);
+          imageio::save_png(base + "_bev.png", pic.pixels.data(), pic.width, pic.height, 3);
+        }
+        return 0;
+      });
+      ++done;
+      if (!quiet)
+        std::fprintf(stderr, "[%zu/%zu] %s: %zu stixels%s\n", i + 1, images.size(), path.c_str(), world.stixels.size(),
+                     cluster ? (", " + std::to_string(world.context.clusters + 1) + " clusters").c_str() : "");
+    } catch (const std::exception& e) {
+      ++failed;
+      std::fprintf(stderr, "stixelnext: %s\n", e.what());
+    }
+  }
+  if (profile && done) std::fputs(predictor->model().profiler().table().c_str(), stdout);
+  if (done) {
+    std::printf("stage times, mean over %d image%s (ms):", done, done == 1 ? "" : "s");
+    double total = 0;
+    for (int s = 0; s < kStages; ++s) {
+      std::printf(" %s %.2f", kStageNames[s], timer.ms[s] / done);
+      total += timer.ms[s] / done;
+    }
+    std::printf("  | total %.2f\n", total);
+  }
+  if (failed && images.size() > 1) std::fprintf(stderr, "stixelnext: %d of %zu images failed\n", failed, images.size());
+  return failed ? 1 : 0;
+}

@@ -1,0 +1,127 @@
+#include "stixel/predictor.h"
+
+#include <cstdlib>
+#include <cstring>
+
+#include "nn/layout.h"
+#include "nn/resize.h"
+#include "stixel/error.h"
+
+namespace stixel {
+
+namespace {
+
+int metadata_int(const std::map<std::string, std::string>& md, const std::string& key, int fallback, int lo, int hi,
+                 const std::string& source) {
+  auto it = md.find(key);
+  if (it == md.end()) return fallback;
+  char* end = nullptr;
+  const long v = std::strtol(it->second.c_str(), &end, 10);
+  if (it->second.empty() || *end || v < lo || v > hi)
+    throw Error(source + ": metadata " + key + "='" + it->second + "' is not an integer in [" + std::to_string(lo) +
+                ", " + std::to_string(hi) + "]");
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+const char* normalization_name(Normalization n) {
+  switch (n) {
+    case Normalization::Raw255: return "raw255";
+    case Normalization::Unit: return "unit";
+    case Normalization::ImageNet: return "imagenet";
+  }
+  return "?";
+}
+
+bool parse_normalization(const std::string& text, Normalization* out) {
+  for (auto n : {Normalization::Raw255, Normalization::Unit, Normalization::ImageNet})
+    if (text == normalization_name(n)) {
+      *out = n;
+      return true;
+    }
+  return false;
+}
+
+ModelSettings settings_from_metadata(const std::map<std::string, std::string>& md, const std::string& source) {
+  ModelSettings s;
+  s.input_height = metadata_int(md, "stixelnext.input_height", s.input_height, 32, 16384, source);
+  s.input_width = metadata_int(md, "stixelnext.input_width", s.input_width, 32, 16384, source);
+  s.stixel_width = metadata_int(md, "stixelnext.stixel_width", s.stixel_width, 1, 1024, source);
+  s.columns = metadata_int(md, "stixelnext.columns", 0, 1, 16384, source);
+  if (auto it = md.find("stixelnext.anchors"); it != md.end())
+    s.anchors = parse_anchor_spec(it->second, source + ": metadata stixelnext.anchors");
+  if (auto it = md.find("stixelnext.normalization"); it != md.end() && !parse_normalization(it->second, &s.normalization))
+    throw Error(source + ": metadata stixelnext.normalization='" + it->second + "' is not raw255, unit or imagenet");
+  if (auto it = md.find("stixelnext.head"); it != md.end()) {
+    nn::StixelHeadVariant v;
+    if (!nn::parse_stixel_head(it->second, &v))
+      throw Error(source + ": metadata stixelnext.head='" + it->second + "' is not one of v0..v4");
+    s.head = v;
+  }
+  return s;
+}
+
+std::vector<float> scale_intrinsics(const std::vector<float>& K, int w0, int h0, int w1, int h1) {
+  std::vector<float> k = K;
+  const double sx = static_cast<double>(w1) / w0, sy = static_cast<double>(h1) / h0;
+  k[0] = static_cast<float>(K[0] * sx);
+  k[1] = static_cast<float>(K[1] * sx);
+  k[2] = static_cast<float>((K[2] + 0.5) * sx - 0.5);
+  k[3] = static_cast<float>(K[3] * sy);
+  k[4] = static_cast<float>(K[4] * sy);
+  k[5] = static_cast<float>((K[5] + 0.5) * sy - 0.5);
+  return k;
+}
+
+Predictor::Predictor(const weights::SafeTensors& st, const ModelSettings& settings)
+    : settings_(settings), model_(st, settings.head) {
+  if (settings_.anchors.size() != nn::StixelHead::kCandidates)
+    throw Error(st.source() + ": the head predicts 64 candidates but the anchor set has " +
+                std::to_string(settings_.anchors.size()));
+  model_.plan(1, settings_.input_height, settings_.input_width, settings_.effective_columns());
+  input_.resize(static_cast<std::size_t>(3) * settings_.input_height * settings_.input_width);
+  resized_.resize(input_.size());
+}
+
+bool Predictor::preprocess(const std::uint8_t* rgb, int width, int height) {
+  static const float kMean[3] = {0.485f, 0.456f, 0.406f}, kStd[3] = {0.229f, 0.224f, 0.225f};
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  if (image_.size() < pixels * 3) image_.resize(pixels * 3);
+  float* x = image_.data();
+  for (std::size_t i = 0; i < pixels * 3; ++i) {
+    const float v = rgb[i];
+    switch (settings_.normalization) {
+      case Normalization::Raw255: x[i] = v; break;
+      case Normalization::Unit: x[i] = v / 255.0f; break;
+      case Normalization::ImageNet: x[i] = (v / 255.0f - kMean[i % 3]) / kStd[i % 3]; break;
+    }
+  }
+  const int h1 = settings_.input_height, w1 = settings_.input_width;
+  const bool resize = width != w1 || height != h1;
+  const float* nhwc = x;
+  if (resize) {
+    nn::resize_bilinear(nn::ConstTensorView(x, {1, height, width, 3}), nn::TensorView{resized_.data(), {1, h1, w1, 3}});
+    nhwc = resized_.data();
+  }
+  nn::nhwc_to_nchw(nhwc, 1, 3, h1, w1, input_.data());
+  return resize;
+}
+
+const float* Predictor::run_network() {
+  prediction_ = model_.forward(input_.data());
+  return prediction_;
+}
+
+StixelWorld Predictor::extract(double threshold, double depth_scale) const {
+  if (!prediction_) throw Error("stixelnext: extract() before run_network()");
+  ExtractOptions o;
+  o.threshold = threshold;
+  o.image_height = settings_.input_height;
+  o.stixel_width = settings_.stixel_width;
+  o.depth_scale = depth_scale;
+  return stixel::extract(prediction_, model_.head().attributes(), nn::StixelHead::kCandidates, model_.columns(),
+                         settings_.anchors, o);
+}
+
+}  // namespace stixel

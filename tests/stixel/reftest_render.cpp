@@ -1,0 +1,60 @@
+// Overlays against Pillow drawing the way pyStixel-lib does
+// (tests/reference/stixel_render_ref.py): pixel for pixel.
+#include "stixel/render.h"
+#include "tests/stixel/reftest_util.h"
+
+namespace {
+
+void check(const std::string& tensor, const stixel::OverlayOptions& o) {
+  const auto st = stxref::load("stixel_render.safetensors");
+  const auto& shape = st.info("background").shape;
+  stixel::RgbImage bg;
+  bg.height = static_cast<int>(shape[0]);
+  bg.width = static_cast<int>(shape[1]);
+  bg.pixels = stxref::u8(st, "background");
+  stixel::StixelWorld w;
+  const auto u = stxref::i32(st, "u"), vT = stxref::i32(st, "vT"), vB = stxref::i32(st, "vB");
+  const auto width = stxref::i32(st, "width"), cluster = stxref::i32(st, "cluster");
+  const auto d = st.f32("d"), conf = st.f32("confidence");
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    stixel::Stixel s;
+    s.u = u[i];
+    s.vT = vT[i];
+    s.vB = vB[i];
+    s.d = d[i];
+    s.width = width[i];
+    s.confidence = conf[i];
+    s.cluster = cluster[i];
+    w.stixels.push_back(s);
+  }
+  w.context.clusters = std::stoi(stxref::meta(st, "clusters"));
+  const stixel::RgbImage out = stixel::render_overlay(w, bg, o);
+  const std::vector<std::uint8_t> ref = stxref::u8(st, tensor);
+  ASSERT_EQ(out.pixels.size(), ref.size());
+  int mismatches = 0, changed = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    changed += ref[i] != bg.pixels[i];
+    if (out.pixels[i] != ref[i] && mismatches++ < 5)
+      ADD_FAILURE() << tensor << ": pixel " << i / 3 % bg.width << "," << i / 3 / bg.width << " channel "
+                    << i % 3 << ": ours " << int(out.pixels[i]) << ", Pillow " << int(ref[i]);
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(changed, 10000);  // the picture really has stixels on it
+}
+
+}  // namespace
+
+TEST(RenderRef, DepthOverlayMatchesPillow) {
+  stixel::OverlayOptions o;
+  o.alpha = 0.5;
+  o.min_confidence = 0.5;
+  check("overlay_depth", o);
+}
+
+TEST(RenderRef, ClusterOverlayMatchesPillow) {
+  stixel::OverlayOptions o;
+  o.alpha = 0.7;
+  o.min_confidence = 0.2;
+  o.color_by_cluster = true;
+  check("overlay_clusters", o);
+}

@@ -1,0 +1,152 @@
+// stixelnext as users drive it, on a small ConvNeXt + V4 head at 64x96.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "apps/common/image_io.h"
+#include "nn/models/convnext.h"
+#include "nn/models/stixel_head.h"
+#include "nn/models/synthetic_weights.h"
+#include "stixel/stx1.h"
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::stringstream s;
+  s << std::ifstream(path).rdbuf();
+  return s.str();
+}
+
+class StixelnextCli : public testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/stixelnext_test_XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    dir_ = tmpl;
+    write_weights("w.safetensors", nn::StixelHeadVariant::V4);
+    std::vector<std::uint8_t> px(64 * 96 * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = static_cast<std::uint8_t>((i * 37) % 251);
+    imageio::save_png(path("img.png"), px.data(), 96, 64, 3);
+    write_text("cam.json", R"({"K": [80, 0, 47.5, 0, 80, 31.5, 0, 0, 1], "width": 96, "height": 64})");
+  }
+  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+
+  std::string path(const std::string& f) const { return dir_ + "/" + f; }
+  void write_text(const std::string& f, const std::string& text) { std::ofstream(path(f)) << text; }
+  void write_weights(const std::string& f, nn::StixelHeadVariant v) {
+    nn::ConvNeXtConfig cfg{{8, 12, 20, 28}, {1, 1, 1, 1}};
+    auto specs = nn::convnext_tensor_specs(cfg, "features.");
+    for (auto& s : nn::stixel_head_tensor_specs(v, 28, "classifier.")) specs.push_back(s);
+    auto w = nn::synthetic_weights(specs, 5);
+    w.set_metadata("stixelnext.input_height", "64");
+    w.set_metadata("stixelnext.input_width", "96");
+    w.write(path(f));
+  }
+  int run(const std::string& args) {
+    const std::string cmd = std::string(STIXELNEXT_PATH) + " --quiet --threads 2 --out-dir " + path("out") + " " + args +
+                            " >" + path("stdout") + " 2>" + path("stderr");
+    int status = std::system(cmd.c_str());
+    err_ = slurp(path("stderr"));
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  bool exists(const std::string& f) const { return std::ifstream(path(f)).good(); }
+  void expect_error_line(const std::string& must_contain) {
+    EXPECT_NE(err_.find(must_contain), std::string::npos) << "expected '" << must_contain << "' in: " << err_;
+    EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
+  }
+
+  std::string dir_, err_;
+};
+
+TEST_F(StixelnextCli, WritesStx1AndPictures) {
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --calib " + path("cam.json") +
+                " --threshold 0 --overlay --bev --cluster " + path("img.png")), 0) << err_;
+  stixel::StixelWorld world = stixel::read_stx1(path("out/img.stx1"));
+  EXPECT_EQ(world.stixels.size(), 64u * 12u);  // threshold 0: every candidate of 96 / 8 columns
+  EXPECT_EQ(world.context.name, "img");
+  EXPECT_EQ(world.context.calibration.K.size(), 9u);
+  EXPECT_EQ(world.context.calibration.width, 96);
+  EXPECT_GE(world.context.clusters, -1);
+  for (const auto& s : world.stixels) {
+    EXPECT_EQ(s.width, 8);
+    EXPECT_EQ(s.u % 8, 0);
+    EXPECT_GE(s.d, 4.0f);
+  }
+  imageio::Image overlay = imageio::load(path("out/img_overlay.png"));
+  EXPECT_EQ(overlay.width, 96);
+  EXPECT_EQ(overlay.height, 64);
+  EXPECT_TRUE(exists("out/img_bev.png"));
+  EXPECT_NE(slurp(path("stdout")).find("stage times"), std::string::npos);
+}
+
+TEST_F(StixelnextCli, CsvAndJsonFormats) {
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --format csv " + path("img.png")), 0) << err_;
+  EXPECT_EQ(slurp(path("out/img.csv")).rfind("img,u,vT,vB,d", 0), 0u);
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --format json " + path("img.png")), 0) << err_;
+  EXPECT_NE(slurp(path("out/img.json")).find("\"stixel\""), std::string::npos);
+}
+
+TEST_F(StixelnextCli, ResizesOtherImageSizesAndSaysSo) {
+  std::vector<std::uint8_t> px(50 * 70 * 3, 120);
+  imageio::save_png(path("small.png"), px.data(), 70, 50, 3);
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " " + path("small.png")), 0) << err_;
+  EXPECT_NE(err_.find("resized"), std::string::npos) << err_;
+  EXPECT_TRUE(exists("out/small.stx1"));
+}
+
+TEST_F(StixelnextCli, TruncatedImageFailsWithoutOutput) {
+  std::string png = slurp(path("img.png"));
+  write_text("cut.png", png.substr(0, png.size() / 2));
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " " + path("cut.png")), 1);
+  EXPECT_NE(err_.find(path("cut.png")), std::string::npos) << err_;
+  EXPECT_FALSE(exists("out/cut.stx1"));
+}
+
+TEST_F(StixelnextCli, UnreadableImageFailsButOthersAreProcessed) {
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " " + path("missing.png") + " " + path("img.png")), 1);
+  EXPECT_NE(err_.find(path("missing.png")), std::string::npos) << err_;
+  EXPECT_TRUE(exists("out/img.stx1"));
+  EXPECT_FALSE(exists("out/missing.stx1"));
+}
+
+TEST_F(StixelnextCli, UnknownHeadLayoutSaysWhatWasExpected) {
+  nn::ConvNeXtConfig cfg{{8, 12, 20, 28}, {1, 1, 1, 1}};
+  auto specs = nn::convnext_tensor_specs(cfg, "features.");
+  specs.push_back({"classifier.something.weight", {5, 28}});
+  nn::synthetic_weights(specs, 5).write(path("odd.safetensors"));
+  EXPECT_EQ(run("--weights " + path("odd.safetensors") + " " + path("img.png")), 1);
+  expect_error_line("unknown stixel head layout");
+  EXPECT_NE(err_.find("classifier.local_mixing.depthwise.weight"), std::string::npos) << err_;
+}
+
+TEST_F(StixelnextCli, CalibrationWithWrongNumberOfValues) {
+  write_text("bad.json", R"({"K": [80, 0, 47.5, 0, 80, 31.5, 0, 0], "width": 96, "height": 64})");
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --calib " + path("bad.json") + " " + path("img.png")), 1);
+  expect_error_line("\"K\" has 8 values, expected 9");
+  EXPECT_FALSE(exists("out/img.stx1"));
+}
+
+TEST_F(StixelnextCli, SingularCalibration) {
+  write_text("sing.json", R"({"K": [0, 0, 0, 0, 0, 0, 0, 0, 1], "width": 96, "height": 64})");
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --calib " + path("sing.json") + " " + path("img.png")), 1);
+  expect_error_line("singular");
+  EXPECT_FALSE(exists("out/img.stx1"));
+}
+
+TEST_F(StixelnextCli, ThresholdOutsideUnitInterval) {
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --threshold 1.5 " + path("img.png")), 2);
+  EXPECT_NE(err_.find("--threshold"), std::string::npos) << err_;
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --threshold -0.1 " + path("img.png")), 2);
+}
+
+TEST_F(StixelnextCli, ClusterNeedsCalibration) {
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --cluster " + path("img.png")), 2);
+  EXPECT_NE(err_.find("--calib"), std::string::npos) << err_;
+}
+
+}  // namespace
