@@ -85,9 +85,9 @@ class NnrunCli : public testing::Test {
   std::vector<std::uint8_t> with_header(const std::string& h) const {
     std::uint64_t n0 = 0;
     std::memcpy(&n0, good_weights_.data(), 8);
-    std::vector<std::uint8_t> out(8);
-    std::uint64_t n = h.size();
-    std::memcpy(out.data(), &n, 8);
+    std::vector<std::uint8_t> out;
+    out.reserve(8 + h.size() + good_weights_.size());
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<std::uint8_t>(static_cast<std::uint64_t>(h.size()) >> (8 * i)));
     out.insert(out.end(), h.begin(), h.end());
     out.insert(out.end(), good_weights_.begin() + 8 + n0, good_weights_.end());
     return out;

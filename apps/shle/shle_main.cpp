@@ -1,0 +1,191 @@
+// shle: stereo height-limit estimation over one sequence folder.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "apps/common/cli.h"
+#include "apps/common/image_io.h"
+#include "apps/shle/frame_loader.h"
+#include "apps/shle/height_plot.h"
+#include "apps/shle/report.h"
+#include "shle/box_source.h"
+#include "shle/error.h"
+#include "shle/pipeline.h"
+
+namespace {
+
+void progress_bar(std::size_t done, std::size_t total) {
+  const int width = 40;
+  int filled = total ? static_cast<int>(width * done / total) : width;
+  std::string bar(filled, '#');
+  bar.resize(width, '.');
+  std::fprintf(stderr, "\rshle [%s] %zu/%zu frames", bar.c_str(), done, total);
+  if (done == total) std::fputc('\n', stderr);
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
+  std::string tracker = "ncc", out_dir = "shle_out";
+  double gt_height = 0, bf = 0;
+  bool filter_single = false, no_kde = false, no_depth = false, no_kalman = false, compat = false, quiet = false;
+  shle::PipelineOptions opt;
+  shle::HeightOptions& h = opt.height;
+
+  cli::Parser p("shle", "--sequence DIR --calib C.json [options]",
+                "Stereo height-limit estimation (SHLE): the clearance of a bar, bridge or cable ahead,\n"
+                "from the left images, disparity maps and boxes of one sequence. Writes OUT/frames.csv,\n"
+                "OUT/summary.json and OUT/heights.png.");
+  p.option("sequence", "DIR", "sequence folder (left_colorimages/ + disparity_images/, or left/ + disparity/)",
+           &sequence);
+  p.option("calib", "PATH", "calibration JSON (or the adas_params folder with --calib-format smartereye)", &calib);
+  p.option("calib-format", "FMT", "plain (default) or smartereye (calibData.json + DepthCalib.json)",
+           &calib_format);
+  p.option("bf", "M_PX", "override baseline x focal length (metre-pixels)", &bf);
+  p.option("boxes", "SRC", "annotations (LabelMe beside the images, default) or a CSV frame,x0,y0,x1,y1,score",
+           &boxes);
+  p.option("box-rule", "RULE", "paper (default: drop left, low, top-edge boxes, best score) or widest (released)",
+           &rule);
+  p.option("min-score", "S", "keep candidates with score > S (default 0.3)", &opt.box_rule.min_score);
+  p.option("box-test", "T", "paper rule position test: whole (box entirely in the region, default) or centre",
+           &box_test);
+  p.flag("filter-single-box", "apply the paper rule's position filters to a lone candidate too", &filter_single);
+  p.option("tracker", "KIND", "fills frames between boxes: ncc (default), mil (OpenCV MIL port) or none", &tracker);
+  p.option("search-radius", "PX", "tracker search radius (default 25)", &opt.ncc.search_radius);
+  p.option("gt-height", "M", "true height: adds HE / HER to the summary and the plot", &gt_height);
+  p.option("out-dir", "OUT", "output folder (default shle_out)", &out_dir);
+  p.option("extend-top", "PX", "box extension upwards (default 20)", &h.extend_top);
+  p.option("extend-bottom", "PX", "box extension downwards (default 20)", &h.extend_bottom);
+  p.option("min-height", "M", "keep points higher than this above the road (default 1.5)", &h.min_height);
+  p.option("bandwidth", "M", "KDE Gaussian bandwidth, metres (default 2.5)", &h.bandwidth);
+  p.option("grid-step", "M", "KDE grid step, metres (default 1 as released; finer is an improvement)",
+           &h.grid_step);
+  p.option("sigma", "M", "depth window half width around the KDE mode (default 0.6)", &h.sigma);
+  p.option("lowest-n", "N", "average the N lowest points (default 10)", &h.lowest_n);
+  p.flag("no-kde", "centre depth = mean depth instead of the KDE mode", &no_kde);
+  p.flag("no-depth-filter", "keep all points instead of the depth window", &no_depth);
+  p.flag("no-kalman", "no temporal filter: scene height = mean raw height", &no_kalman);
+  p.flag("kalman-compat", "the released code's Kalman off-by-one (outputs shifted, last value 0)", &compat);
+  p.option("q", "VAR", "Kalman process noise (default 1e-3)", &opt.temporal.kalman.q);
+  p.option("r", "VAR", "Kalman measurement noise (default 1e-2)", &opt.temporal.kalman.r);
+  p.option("p0", "VAR", "Kalman initial variance (default 6)", &opt.temporal.kalman.p0);
+  p.flag("quiet", "no progress bar and no per-frame warnings", &quiet);
+  p.required("sequence");
+  p.required("calib");
+  p.epilog(
+      "example:\n"
+      "  shle_synth --out /tmp/scene --device bar --height 3.3\n"
+      "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --gt-height 3.3 --out-dir /tmp/out");
+  p.parse(argc, argv);
+
+  opt.temporal.use_kalman = !no_kalman;
+  opt.temporal.kalman_compat = compat;
+  h.use_kde = !no_kde;
+  h.use_depth_window = !no_depth;
+  opt.tracker = tracker;
+  opt.mil.search_radius = opt.ncc.search_radius;
+  opt.box_rule.paper.filter_single = filter_single;
+  if (box_test == "centre" || box_test == "center")
+    opt.box_rule.paper.centre_test = true;
+  else if (box_test != "whole")
+    p.fail("--box-test must be whole or centre");
+  if (p.given("gt-height")) {
+    if (!(gt_height > 0) || !std::isfinite(gt_height)) p.fail("--gt-height must be > 0");
+    opt.has_gt_height = true;
+    opt.gt_height = gt_height;
+  }
+  if (!(opt.temporal.kalman.q >= 0 && opt.temporal.kalman.r > 0 && opt.temporal.kalman.p0 >= 0) ||
+      !std::isfinite(opt.temporal.kalman.q + opt.temporal.kalman.r + opt.temporal.kalman.p0))
+    p.fail("Kalman variances must be finite, q >= 0, r > 0, p0 >= 0");
+
+  try {
+    opt.box_rule.rule = shle::parse_box_rule(rule);
+    shle::validate(h);
+    shle::make_tracker(tracker, opt.ncc);
+    if (opt.ncc.search_radius < 1) throw shle::Error("--search-radius must be >= 1");
+  } catch (const std::exception& e) {
+    p.fail(e.what());
+  }
+
+  try {
+    shle::Calibration cal;
+    if (calib_format == "plain")
+      cal = shle::load_calibration(calib);
+    else if (calib_format == "smartereye")
+      cal = shle::load_smartereye_calibration(calib);
+    else
+      p.fail("--calib-format must be plain or smartereye");
+    if (p.given("bf")) {
+      if (!(bf > 0) || !std::isfinite(bf)) p.fail("--bf must be > 0");
+      cal.bf = bf;
+    }
+    shle::Sequence seq = shle::scan_sequence(sequence);
+    std::unique_ptr<shle::BoxSource> source;
+    if (boxes == "annotations")
+      source = std::make_unique<shle::AnnotationBoxSource>();
+    else
+      source = std::make_unique<shle::BoxesFileSource>(boxes, seq.frames.size());
+
+    std::filesystem::create_directories(out_dir);
+    shleapp::PngFrameLoader loader;
+    bool bar = !quiet && isatty(2);
+    shle::SequenceRun run = shle::run_sequence(seq, cal, *source, loader, opt,
+                                               bar ? shle::Progress(progress_bar) : shle::Progress());
+
+    if (!quiet) {
+      int shown = 0, total = 0;
+      for (const shle::FrameRecord& r : run.frames)
+        for (const std::string& msg : r.problems) {
+          if (shown < 30) {
+            std::fprintf(stderr, "shle: warning: frame %d: %s\n", r.index, msg.c_str());
+            ++shown;
+          }
+          ++total;
+        }
+      if (total > shown)
+        std::fprintf(stderr, "shle: warning: ... %d more problems, see %s/summary.json\n", total - shown,
+                     out_dir.c_str());
+    }
+
+    std::string csv = shleapp::frames_csv(run);
+    shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt};
+    std::string summary = shleapp::summary_json(run, desc);
+    shleapp::HeightPlotData plot;
+    plot.frames = static_cast<int>(run.frames.size());
+    for (const shle::FrameRecord& r : run.frames) {
+      if (r.stage2.has_height) plot.raw.emplace_back(r.index, r.stage2.height);
+      if (r.has_filtered) plot.filtered.emplace_back(r.index, r.filtered);
+    }
+    plot.has_gt = opt.has_gt_height;
+    plot.gt = opt.gt_height;
+    plot.has_scene = run.heights.has_scene_height;
+    plot.scene = run.heights.scene_height;
+    shleapp::Canvas canvas = shleapp::draw_height_plot(plot);
+    const std::filesystem::path out(out_dir);
+    imageio::write_file_atomic((out / "frames.csv").string(), csv.data(), csv.size());
+    imageio::write_file_atomic((out / "summary.json").string(), summary.data(), summary.size());
+    imageio::save_png((out / "heights.png").string(), canvas.rgb().data(), canvas.width(), canvas.height(), 3);
+
+    if (run.heights.has_scene_height) {
+      std::printf("scene height %.3f m over %zu of %zu frames", run.heights.scene_height, run.frames_used,
+                  run.frames.size());
+      if (run.has_errors)
+        std::printf(" (truth %.3f m, HE %+.3f m, HER %+.2f %%)", opt.gt_height, run.scene_error.he,
+                    100.0 * run.scene_error.her);
+      std::printf("\n");
+    } else {
+      std::printf("no height: none of the %zu frames has one (see %s/summary.json)\n", run.frames.size(),
+                  out_dir.c_str());
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "shle: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,177 @@
+// The shle command end to end on a synthetic sequence, and its failure modes.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "apps/common/image_io.h"
+#include "tests/shle/test_util.h"
+#include "weights/json.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shletest::TempDir;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+Result run(const std::string& args, const TempDir& dir) {
+  std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
+  int status = std::system((args + " > '" + out + "' 2> '" + err + "'").c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+// One synthetic sequence shared by the tests (written once).
+const std::string& sequence() {
+  static TempDir dir;
+  static const std::string seq = [] {
+    std::string s = dir / "seq";
+    std::string cmd = std::string(SHLE_SYNTH_APP) + " --out '" + s + "' --frames 6 --seed 9 --quiet";
+    if (std::system(cmd.c_str()) != 0) throw std::runtime_error("shle_synth failed");
+    return s;
+  }();
+  return seq;
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : s) {
+    if (c == sep) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+TEST(ShleApp, WritesCsvSummaryAndPlot) {
+  TempDir dir;
+  const std::string out = dir / "out";
+  Result r = run(std::string(SHLE_APP) + " --sequence '" + sequence() + "' --calib '" + sequence() +
+                     "/calib.json' --gt-height 3.3 --out-dir '" + out + "'",
+                 dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("scene height"), std::string::npos);
+  EXPECT_NE(r.out.find("truth 3.300 m"), std::string::npos);
+  std::vector<std::string> lines = split(slurp(out + "/frames.csv"), '\n');
+  ASSERT_EQ(lines.size(), 8u);  // header, 6 frames, final newline
+  EXPECT_EQ(lines[0], "frame,image,box_source,x0,y0,x1,y1,points,height_raw,height_filtered");
+  for (int i = 1; i <= 6; ++i) {
+    std::vector<std::string> f = split(lines[i], ',');
+    ASSERT_EQ(f.size(), 10u) << lines[i];
+    EXPECT_EQ(f[0], std::to_string(i - 1));
+    EXPECT_EQ(f[2], "annotations");
+    EXPECT_EQ(lines[i].find("nan"), std::string::npos);
+    double h = std::stod(f[8]), hf = std::stod(f[9]);
+    EXPECT_NEAR(h, 3.3, 0.4);
+    EXPECT_NEAR(hf, 3.3, 0.4);
+  }
+  EXPECT_TRUE(lines[7].empty());
+  json::Value s = json::parse(slurp(out + "/summary.json"), "summary.json");
+  EXPECT_EQ(s.get("frames")->number(), 6);
+  EXPECT_EQ(s.get("frames_used")->number(), 6);
+  EXPECT_NEAR(s.get("scene_height")->number(), 3.3, 0.3);
+  EXPECT_NEAR(s.get("he")->number(), s.get("scene_height")->number() - 3.3, 1e-9);
+  EXPECT_TRUE(s.get("timings_ms")->is_object());
+  imageio::Image plot = imageio::load(out + "/heights.png");
+  EXPECT_EQ(plot.width, 1000);
+  EXPECT_EQ(plot.height, 560);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(out)) {
+    (void)e;
+    ++files;
+  }
+  EXPECT_EQ(files, 3);  // no temporary files left behind
+}
+
+TEST(ShleApp, BoxesFileAndOptions) {
+  TempDir dir;
+  Result r = run(std::string(SHLE_APP) + " --sequence '" + sequence() + "' --calib '" + sequence() +
+                     "/calib.json' --boxes '" + sequence() + "/detections.csv' --box-rule widest --kalman-compat" +
+                     " --grid-step 0.5 --out-dir '" + (dir / "o") + "' --quiet",
+                 dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string csv = slurp(dir / "o/frames.csv");
+  EXPECT_EQ(csv.find("nan"), std::string::npos);
+  json::Value s = json::parse(slurp(dir / "o/summary.json"), "s");
+  EXPECT_EQ(s.get("box_source")->str(), "boxes-file");
+  EXPECT_TRUE(s.get("options")->get("kalman_compat")->boolean());
+  EXPECT_TRUE(s.get("gt_height")->is_null());
+}
+
+TEST(ShleApp, UsageAndInputErrors) {
+  TempDir dir;
+  const std::string app = SHLE_APP, seq = sequence();
+  Result r = run(app + " --help", dir);
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("--kalman-compat"), std::string::npos);
+  r = run(app + " --sequence '" + seq + "'", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--calib is required"), std::string::npos);
+  r = run(app + " --sequence '" + seq + "' --calib x --box-rule best", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown box rule 'best'"), std::string::npos);
+  r = run(app + " --sequence '" + seq + "' --calib x --lowest-n 0", dir);
+  EXPECT_EQ(r.code, 2);
+  r = run(app + " --sequence '" + (dir / "nope") + "' --calib '" + seq + "/calib.json' --out-dir '" + (dir / "o") + "'",
+          dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no such sequence folder"), std::string::npos);
+  shletest::write_text(dir / "bad.json", "{\"fx\": 1,}");
+  r = run(app + " --sequence '" + seq + "' --calib '" + (dir / "bad.json") + "' --out-dir '" + (dir / "o") + "'",
+          dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("bad.json"), std::string::npos);
+  shletest::write_text(dir / "b.csv", "0,1,2,3\n");
+  r = run(app + " --sequence '" + seq + "' --calib '" + seq + "/calib.json' --boxes '" + (dir / "b.csv") +
+              "' --out-dir '" + (dir / "o") + "'",
+          dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("b.csv: line 1: expected 6 fields"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "o/frames.csv"));
+}
+
+TEST(ShleApp, SequenceWithoutAnyHeight) {
+  TempDir dir;
+  // Copy the sequence and zero every disparity: the run succeeds with no height.
+  fs::copy(sequence(), dir / "seq", fs::copy_options::recursive);
+  for (const auto& e : fs::directory_iterator(dir / "seq/disparity_images"))
+    shletest::write_bytes(e.path().string(), std::vector<std::uint8_t>(2 * 1280 * 720, 0));
+  Result r = run(std::string(SHLE_APP) + " --sequence '" + (dir / "seq") + "' --calib '" + (dir / "seq/calib.json") +
+                     "' --gt-height 3.3 --out-dir '" + (dir / "o") + "'",
+                 dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("no height"), std::string::npos);
+  EXPECT_NE(r.err.find("no valid disparity in the box"), std::string::npos);
+  std::vector<std::string> lines = split(slurp(dir / "o/frames.csv"), '\n');
+  for (int i = 1; i <= 6; ++i) {
+    std::vector<std::string> f = split(lines[i], ',');
+    ASSERT_EQ(f.size(), 10u);
+    EXPECT_EQ(f[8], "");
+    EXPECT_EQ(f[9], "");
+  }
+  json::Value s = json::parse(slurp(dir / "o/summary.json"), "s");
+  EXPECT_TRUE(s.get("scene_height")->is_null());
+  EXPECT_TRUE(s.get("he")->is_null());
+  EXPECT_TRUE(fs::exists(dir / "o/heights.png"));
+}
+
+}  // namespace
