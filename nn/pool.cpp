@@ -13,15 +13,10 @@
 namespace nn {
 namespace {
 
-std::string str(const Shape& s) {
-  return "[" + std::to_string(s.n) + "," + std::to_string(s.h) + "," + std::to_string(s.w) + "," +
-         std::to_string(s.c) + "]";
-}
-
 void check_io(const char* who, const ConstTensorView& in, const TensorView& out,
               const Shape& want) {
   if (out.shape != want)
-    throw Error(std::string(who) + ": output shape " + str(out.shape) + " should be " + str(want));
+    throw Error(std::string(who) + ": output shape " + shape_str(out.shape) + " should be " + shape_str(want));
   if (!in.data || !out.data) throw Error(std::string(who) + ": null tensor data");
   if (in.data < out.data + out.count() && out.data < in.data + in.count())
     throw Error(std::string(who) + ": output must not overlap the input");
@@ -29,7 +24,7 @@ void check_io(const char* who, const ConstTensorView& in, const TensorView& out,
 
 void check_input(const char* who, const Shape& in) {
   if (in.n < 1 || in.h < 1 || in.w < 1 || in.c < 1)
-    throw Error(std::string(who) + ": input shape " + str(in) + " must be positive");
+    throw Error(std::string(who) + ": input shape " + shape_str(in) + " must be positive");
 }
 
 #ifdef ROADNN_OPENMP
@@ -81,7 +76,7 @@ Shape max_pool2d_output_shape(const Shape& in, const MaxPoolParams& p) {
     throw Error("max_pool2d: kernel " + k + ": pad should be at most half of the kernel size");
   const int eh = in.h + 2 * p.pad_h - p.kh, ew = in.w + 2 * p.pad_w - p.kw;
   if (eh < 0 || ew < 0)
-    throw Error("max_pool2d: input " + str(in) + " is smaller than kernel " + k);
+    throw Error("max_pool2d: input " + shape_str(in) + " is smaller than kernel " + k);
   return Shape{in.n, eh / p.stride_h + 1, ew / p.stride_w + 1, in.c};
 }
 

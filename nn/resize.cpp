@@ -15,17 +15,12 @@
 namespace nn {
 namespace {
 
-std::string str(const Shape& s) {
-  return "[" + std::to_string(s.n) + "," + std::to_string(s.h) + "," + std::to_string(s.w) + "," +
-         std::to_string(s.c) + "]";
-}
-
 void check(const char* who, const ConstTensorView& in, const TensorView& out, double scale_h,
            double scale_w) {
   const Shape& a = in.shape;
   const Shape& b = out.shape;
   if (a.n < 1 || a.h < 1 || a.w < 1 || a.c < 1 || b.h < 1 || b.w < 1 || a.n != b.n || a.c != b.c)
-    throw Error(std::string(who) + ": cannot resize " + str(a) + " to " + str(b) +
+    throw Error(std::string(who) + ": cannot resize " + shape_str(a) + " to " + shape_str(b) +
                 " (sizes must be positive, batch and channels equal)");
   if (!(scale_h >= 0.0) || !(scale_w >= 0.0) || std::isinf(scale_h) || std::isinf(scale_w))
     throw Error(std::string(who) + ": scale factors must be finite and positive (or 0 for none)");

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 namespace nn {
 
@@ -27,6 +28,9 @@ struct TensorView {
     return data + ((static_cast<std::size_t>(n) * shape.h + y) * shape.w + x) * shape.c;
   }
 };
+
+// "[n,h,w,c]" (NHWC order) for error messages.
+std::string shape_str(const Shape& s);
 
 struct ConstTensorView {
   const float* data = nullptr;

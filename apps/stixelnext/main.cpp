@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <exception>
 #include <memory>
-#include <set>
 #include <string>
 #include <cerrno>
 #include <sys/stat.h>
@@ -14,6 +13,7 @@
 
 #include "apps/common/cli.h"
 #include "apps/common/image_io.h"
+#include "apps/common/unused_tensors.h"
 #include "apps/stixelnext/calibration.h"
 #include "nn/isa.h"
 #include "nn/resize.h"
@@ -157,14 +157,7 @@ int main(int argc, char** argv) {
       s.columns = columns;
     }
     predictor = std::make_unique<stixel::Predictor>(w, s);
-    std::set<std::string> used;
-    for (const auto& n : predictor->model().used_tensors()) used.insert(n);
-    std::vector<std::string> unused;
-    for (const auto& n : w.names())
-      if (!used.count(n)) unused.push_back(n);
-    if (!unused.empty())
-      std::fprintf(stderr, "stixelnext: warning: %s: %zu tensors are not used (first: %s)\n", weights_path.c_str(),
-                   unused.size(), unused[0].c_str());
+    apps::warn_unused_tensors("stixelnext", w, predictor->model().used_tensors(), "StixelNExT++");
     if (!calib_path.empty()) {
       calib = stixelnext::read_calibration(calib_path);
       stixel::Projection check(calib.K, calib.T, calib_path);  // a singular K4 * T fails here, once
