@@ -4,11 +4,12 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
-#include <set>
 #include <string>
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/unused_tensors.h"
+#include "apps/nnrun/detector_runner.h"
 #include "apps/nnrun/runner.h"
 #include "nn/isa.h"
 #include "nn/threads.h"
@@ -22,6 +23,13 @@ const std::vector<ModelInfo>& models() {
       {"convnext_small", "torchvision convnext_small().features", make_convnext},
       {"convnext_base", "torchvision convnext_base().features", make_convnext},
       {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext},
+      {"fasterrcnn_mobilenet_v3_large_fpn",
+       "torchvision Faster R-CNN, MobileNetV3-Large FPN: input [1,3,H,W] RGB in [0,1] -> boxes [K,4], scores [K], "
+       "labels [K] (I64) in input pixels",
+       make_detector},
+      {"fasterrcnn_mobilenet_v3_large_320_fpn", "the same at 320/640 px (torchvision's low-resolution defaults)",
+       make_detector},
+      {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector},
   };
   return list;
 }
@@ -84,18 +92,7 @@ int main(int argc, char** argv) {
       // The file's bytes are released once the model has repacked them.
       weights::SafeTensors w = weights::SafeTensors::load(weights_path);
       runner = info->make(model, w);
-      std::set<std::string> used;
-      for (const auto& n : runner->used_tensors()) used.insert(n);
-      std::vector<std::string> unused;
-      for (const auto& n : w.names())
-        if (!used.count(n)) unused.push_back(n);
-      if (!unused.empty()) {
-        std::string list;
-        for (std::size_t i = 0; i < unused.size() && i < 8; ++i) list += (i ? ", " : "") + unused[i];
-        if (unused.size() > 8) list += ", ...";
-        std::fprintf(stderr, "nnrun: warning: %s: %zu tensors not used by %s: %s\n", weights_path.c_str(),
-                     unused.size(), model.c_str(), list.c_str());
-      }
+      apps::warn_unused_tensors("nnrun", w, runner->used_tensors(), model);
     }
     {
       weights::SafeTensors x = weights::SafeTensors::load(input_path);

@@ -1,0 +1,58 @@
+// Faster R-CNN (torchvision layout, seeded random weights, 2 classes) on one
+// 720x1280 frame: whole forward and, as counters, the mean ms of each stage
+// (transform, backbone, FPN, RPN, RoI heads with post-processing).
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "nn/models/detection/faster_rcnn.h"
+#include "nn/models/synthetic_weights.h"
+#include "nn/threads.h"
+
+namespace {
+
+namespace det = nn::detection;
+
+const weights::SafeTensors& detector_weights(det::FasterRcnnVariant v) {
+  static std::map<int, weights::SafeTensors> cache;
+  auto it = cache.find(static_cast<int>(v));
+  if (it == cache.end())
+    it = cache.emplace(static_cast<int>(v),
+                       weights::SafeTensors::from_bytes(
+                           nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 2), 11).bytes(),
+                           std::string("synthetic ") + det::faster_rcnn_name(v)))
+             .first;
+  return it->second;
+}
+
+void BM_FasterRcnn(benchmark::State& state) {
+  const auto v = static_cast<det::FasterRcnnVariant>(state.range(0));
+  const int threads = static_cast<int>(state.range(1));
+  const int h = 720, w = 1280;
+  nn::set_num_threads(threads);
+  det::FasterRcnn model(detector_weights(v), v);
+  model.plan(h, w);
+  nn::SplitMix64 rng(3);
+  std::vector<float> x(static_cast<std::size_t>(3) * h * w);
+  for (auto& e : x) e = static_cast<float>(rng.uniform());
+  model.forward(x.data());  // warm-up: first touch of every buffer
+  model.profiler().set_enabled(true);
+  model.profiler().reset_times();
+  for (auto _ : state) benchmark::DoNotOptimize(model.forward(x.data()).boxes.data());
+  for (const auto& e : model.profiler().entries())
+    if (e.calls > 0) state.counters[e.layer + "_ms"] = e.total_ms / e.calls;
+  state.SetLabel(det::faster_rcnn_name(v));
+  nn::set_num_threads(0);
+}
+
+BENCHMARK(BM_FasterRcnn)
+    ->ArgNames({"variant", "threads"})
+    ->Args({static_cast<int>(det::FasterRcnnVariant::MobileNetV3LargeFpn), 2})
+    ->Args({static_cast<int>(det::FasterRcnnVariant::MobileNetV3Large320Fpn), 2})
+    ->Args({static_cast<int>(det::FasterRcnnVariant::ResNet50Fpn), 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
+
+}  // namespace

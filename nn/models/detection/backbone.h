@@ -1,0 +1,19 @@
+// What the detector needs from a backbone body: the feature maps the FPN consumes.
+#pragma once
+
+#include <vector>
+
+#include "nn/tensor.h"
+
+namespace nn::detection {
+
+class Backbone {
+ public:
+  virtual ~Backbone() = default;
+  virtual std::vector<int> out_channels() const = 0;
+  virtual void plan(int h, int w) = 0;
+  // in: {1, h, w, 3}. Views stay valid until the next forward.
+  virtual std::vector<ConstTensorView> forward(const ConstTensorView& in) = 0;
+};
+
+}  // namespace nn::detection

@@ -1,0 +1,86 @@
+#include "nn/models/detection/fpn.h"
+
+#include <algorithm>
+
+#include "nn/resize.h"
+
+namespace nn::detection {
+
+namespace {
+
+Conv2dParams params(int cin, int k) {
+  Conv2dParams p;
+  p.cin = cin, p.cout = Fpn::kChannels, p.kh = p.kw = k, p.pad_h = p.pad_w = k / 2;
+  return p;
+}
+
+std::string inner_name(const std::string& prefix, std::size_t i) {
+  return prefix + "inner_blocks." + std::to_string(i) + ".0.";
+}
+std::string layer_name(const std::string& prefix, std::size_t i) {
+  return prefix + "layer_blocks." + std::to_string(i) + ".0.";
+}
+
+}  // namespace
+
+std::vector<weights::TensorSpec> Fpn::tensor_specs(const std::string& prefix, const std::vector<int>& in) {
+  std::vector<weights::TensorSpec> s;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    s.push_back({inner_name(prefix, i) + "weight", {kChannels, in[i], 1, 1}});
+    s.push_back({inner_name(prefix, i) + "bias", {kChannels}});
+    s.push_back({layer_name(prefix, i) + "weight", {kChannels, kChannels, 3, 3}});
+    s.push_back({layer_name(prefix, i) + "bias", {kChannels}});
+  }
+  return s;
+}
+
+Fpn::Fpn(const weights::SafeTensors& st, const std::string& prefix, const std::vector<int>& in) {
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    inner_.push_back(load_conv(st, inner_name(prefix, i), params(in[i], 1)));
+    layer_.push_back(load_conv(st, layer_name(prefix, i), params(kChannels, 3)));
+  }
+}
+
+void Fpn::plan(const std::vector<Shape>& inputs) {
+  const std::size_t n = inputs.size();
+  inner_out_.resize(n);
+  upsampled_.resize(n);
+  out_.resize(n);
+  scratch_ = ConvScratch();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Shape s{1, inputs[i].h, inputs[i].w, kChannels};
+    inner_out_[i].resize(s);
+    upsampled_[i].resize(s);
+    out_[i].resize(s);
+    scratch_.require(inner_[i].params(), s.w);
+    scratch_.require(layer_[i].params(), s.w);
+  }
+  const Shape last = out_[n - 1].shape;
+  pool_.resize({1, (last.h - 1) / 2 + 1, (last.w - 1) / 2 + 1, kChannels});
+  scratch_.allocate();
+}
+
+std::vector<ConstTensorView> Fpn::forward(const std::vector<ConstTensorView>& x) {
+  const std::size_t n = x.size();
+  conv2d(x[n - 1], inner_[n - 1], inner_out_[n - 1].view(), scratch_.get());
+  conv2d(inner_out_[n - 1].cview(), layer_[n - 1], out_[n - 1].view(), scratch_.get());
+  for (std::size_t i = n - 1; i-- > 0;) {
+    // last_inner = lateral + interpolate(last_inner, size=lateral size, mode="nearest");
+    // the epilogue adds the residual after the bias, i.e. (conv + bias) + top_down.
+    upsample_nearest(inner_out_[i + 1].cview(), upsampled_[i].view());
+    conv2d(x[i], inner_[i], inner_out_[i].view(), scratch_.get(), Act::None, upsampled_[i].data.data());
+    conv2d(inner_out_[i].cview(), layer_[i], out_[i].view(), scratch_.get());
+  }
+  const Shape last = out_[n - 1].shape;
+  for (int y = 0; y < pool_.shape.h; ++y)
+    for (int xx = 0; xx < pool_.shape.w; ++xx) {
+      const float* src = out_[n - 1].cview().pixel(0, 2 * y, 2 * xx);
+      std::copy(src, src + last.c, pool_.view().pixel(0, y, xx));
+    }
+  std::vector<ConstTensorView> result;
+  for (auto& o : out_) result.push_back(o.cview());
+  result.push_back(pool_.cview());
+  return result;
+}
+
+}  // namespace nn::detection

@@ -1,0 +1,29 @@
+// torchvision's FeaturePyramidNetwork with LastLevelMaxPool: 1x1 laterals, top-down
+// nearest upsampling added to the lateral, 3x3 outputs, and 'pool' = the last output
+// subsampled by 2 (max_pool2d with kernel 1). Outputs are ordered '0', '1', ..., 'pool'.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "nn/models/detection/layers.h"
+
+namespace nn::detection {
+
+class Fpn {
+ public:
+  static constexpr int kChannels = 256;
+  Fpn(const weights::SafeTensors& st, const std::string& prefix, const std::vector<int>& in_channels);
+  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, const std::vector<int>& in_channels);
+
+  void plan(const std::vector<Shape>& inputs);
+  std::vector<ConstTensorView> forward(const std::vector<ConstTensorView>& inputs);
+
+ private:
+  std::vector<Conv2dWeights> inner_, layer_;
+  std::vector<Activation> inner_out_, upsampled_, out_;
+  Activation pool_;
+  ConvScratch scratch_;
+};
+
+}  // namespace nn::detection

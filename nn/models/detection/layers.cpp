@@ -1,0 +1,76 @@
+#include "nn/models/detection/layers.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "nn/threads.h"
+
+namespace nn::detection {
+
+namespace {
+
+// Per-channel scale and shift of a frozen batch norm, in float as FrozenBatchNorm2d.
+void bn_scale_shift(const weights::SafeTensors& st, const std::string& bn, float eps, std::vector<float>* scale,
+                    std::vector<float>* shift) {
+  const auto g = st.f32(bn + "weight"), b = st.f32(bn + "bias"), m = st.f32(bn + "running_mean"),
+             v = st.f32(bn + "running_var");
+  scale->resize(g.size());
+  shift->resize(g.size());
+  for (std::size_t c = 0; c < g.size(); ++c) {
+    (*scale)[c] = g[c] * (1.0f / std::sqrt(v[c] + eps));
+    (*shift)[c] = b[c] - m[c] * (*scale)[c];
+  }
+}
+
+std::vector<float> folded(const weights::SafeTensors& st, const std::string& conv_weight, const std::vector<float>& scale) {
+  std::vector<float> w = st.f32(conv_weight);
+  const std::size_t per = w.size() / scale.size();
+  for (std::size_t o = 0; o < scale.size(); ++o)
+    for (std::size_t i = 0; i < per; ++i) w[o * per + i] *= scale[o];
+  return w;
+}
+
+}  // namespace
+
+void add_conv_bn_specs(std::vector<weights::TensorSpec>& specs, const std::string& conv_weight,
+                       const std::string& bn, const Dims& shape) {
+  specs.push_back({conv_weight, shape});
+  for (const char* leaf : {"weight", "bias", "running_mean", "running_var"}) specs.push_back({bn + leaf, {shape[0]}});
+}
+
+Conv2dWeights load_conv_bn(const weights::SafeTensors& st, const std::string& conv_weight, const std::string& bn,
+                           const Conv2dParams& p, float eps) {
+  std::vector<float> scale, shift;
+  bn_scale_shift(st, bn, eps, &scale, &shift);
+  const std::vector<float> w = folded(st, conv_weight, scale);
+  return Conv2dWeights::pack(w.data(), shift.data(), p);
+}
+
+DwConvWeights load_dwconv_bn(const weights::SafeTensors& st, const std::string& conv_weight, const std::string& bn,
+                             int channels, const DwConvParams& p, float eps) {
+  std::vector<float> scale, shift;
+  bn_scale_shift(st, bn, eps, &scale, &shift);
+  const std::vector<float> w = folded(st, conv_weight, scale);
+  return DwConvWeights::pack(w.data(), shift.data(), channels, p);
+}
+
+Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefix, const Conv2dParams& p) {
+  const auto w = st.f32(prefix + "weight"), b = st.f32(prefix + "bias");
+  return Conv2dWeights::pack(w.data(), b.data(), p);
+}
+
+void ConvScratch::require(const Conv2dParams& p, int out_w) {
+  per_thread_ = std::max(per_thread_, conv2d_scratch_floats(p, out_w));
+}
+
+void ConvScratch::allocate() {
+  threads_ = std::max(1, num_threads());
+  buf_.resize(per_thread_ * threads_ + 16);
+}
+
+float* ConvScratch::get() {
+  if (num_threads() > threads_) allocate();
+  return buf_.data();
+}
+
+}  // namespace nn::detection

@@ -1,0 +1,177 @@
+#include "nn/models/detection/mobilenet_v3.h"
+
+#include <algorithm>
+
+#include "nn/activation.h"
+#include "nn/pool.h"
+
+namespace nn::detection {
+
+namespace {
+
+struct BlockSpec {
+  int cin, k, exp, cout;
+  bool se;
+  Act act;
+  int stride;
+};
+
+// torchvision mobilenetv3.py _mobilenet_v3_conf("mobilenet_v3_large"), features 1..15.
+constexpr BlockSpec kLarge[] = {
+    {16, 3, 16, 16, false, Act::Relu, 1},       {16, 3, 64, 24, false, Act::Relu, 2},
+    {24, 3, 72, 24, false, Act::Relu, 1},       {24, 5, 72, 40, true, Act::Relu, 2},
+    {40, 5, 120, 40, true, Act::Relu, 1},       {40, 5, 120, 40, true, Act::Relu, 1},
+    {40, 3, 240, 80, false, Act::HardSwish, 2}, {80, 3, 200, 80, false, Act::HardSwish, 1},
+    {80, 3, 184, 80, false, Act::HardSwish, 1}, {80, 3, 184, 80, false, Act::HardSwish, 1},
+    {80, 3, 480, 112, true, Act::HardSwish, 1}, {112, 3, 672, 112, true, Act::HardSwish, 1},
+    {112, 5, 672, 160, true, Act::HardSwish, 2}, {160, 5, 960, 160, true, Act::HardSwish, 1},
+    {160, 5, 960, 160, true, Act::HardSwish, 1},
+};
+constexpr int kStem = 16, kLast = 960;
+
+int make_divisible(double v) {
+  int n = std::max(8, static_cast<int>(v + 4) / 8 * 8);
+  if (n < 0.9 * v) n += 8;
+  return n;
+}
+
+Conv2dParams conv_params(int cin, int cout, int k, int stride) {
+  Conv2dParams p;
+  p.cin = cin, p.cout = cout, p.kh = p.kw = k, p.stride_h = p.stride_w = stride, p.pad_h = p.pad_w = (k - 1) / 2;
+  return p;
+}
+
+std::string block_prefix(const std::string& prefix, int i) { return prefix + std::to_string(i) + ".block."; }
+
+}  // namespace
+
+std::vector<weights::TensorSpec> MobileNetV3Backbone::tensor_specs(const std::string& prefix) {
+  std::vector<weights::TensorSpec> s;
+  add_conv_bn_specs(s, prefix + "0.0.weight", prefix + "0.1.", {kStem, 3, 3, 3});
+  for (int i = 1; i <= 15; ++i) {
+    const BlockSpec& b = kLarge[i - 1];
+    const std::string p = block_prefix(prefix, i);
+    int part = 0;
+    if (b.exp != b.cin) {
+      add_conv_bn_specs(s, p + "0.0.weight", p + "0.1.", {b.exp, b.cin, 1, 1});
+      ++part;
+    }
+    const std::string dw = p + std::to_string(part++) + ".";
+    add_conv_bn_specs(s, dw + "0.weight", dw + "1.", {b.exp, 1, b.k, b.k});
+    if (b.se) {
+      const std::string se = p + std::to_string(part++) + ".";
+      const int sq = make_divisible(b.exp / 4);
+      s.push_back({se + "fc1.weight", {sq, b.exp, 1, 1}});
+      s.push_back({se + "fc1.bias", {sq}});
+      s.push_back({se + "fc2.weight", {b.exp, sq, 1, 1}});
+      s.push_back({se + "fc2.bias", {b.exp}});
+    }
+    const std::string pr = p + std::to_string(part) + ".";
+    add_conv_bn_specs(s, pr + "0.weight", pr + "1.", {b.cout, b.exp, 1, 1});
+  }
+  add_conv_bn_specs(s, prefix + "16.0.weight", prefix + "16.1.", {kLast, 160, 1, 1});
+  return s;
+}
+
+MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps) {
+  stem_ = load_conv_bn(st, prefix + "0.0.weight", prefix + "0.1.", conv_params(3, kStem, 3, 2), eps);
+  for (int i = 1; i <= 15; ++i) {
+    const BlockSpec& s = kLarge[i - 1];
+    Block b;
+    b.cin = s.cin, b.exp = s.exp, b.cout = s.cout, b.k = s.k, b.stride = s.stride, b.act = s.act;
+    b.has_expand = s.exp != s.cin;
+    b.residual = s.stride == 1 && s.cin == s.cout;
+    const std::string p = block_prefix(prefix, i);
+    int part = 0;
+    if (b.has_expand) {
+      b.expand = load_conv_bn(st, p + "0.0.weight", p + "0.1.", conv_params(s.cin, s.exp, 1, 1), eps);
+      ++part;
+    }
+    DwConvParams dp;
+    dp.kh = dp.kw = s.k, dp.stride_h = dp.stride_w = s.stride, dp.pad_h = dp.pad_w = (s.k - 1) / 2, dp.act = s.act;
+    const std::string dw = p + std::to_string(part++) + ".";
+    b.dw = load_dwconv_bn(st, dw + "0.weight", dw + "1.", s.exp, dp, eps);
+    if (s.se) {
+      const std::string se = p + std::to_string(part++) + ".";
+      b.se = make_divisible(s.exp / 4);
+      const auto w1 = st.f32(se + "fc1.weight"), w2 = st.f32(se + "fc2.weight");
+      const auto b1 = st.f32(se + "fc1.bias"), b2 = st.f32(se + "fc2.bias");
+      b.fc1 = GemmWeights::pack(w1.data(), b.se, s.exp);
+      b.fc2 = GemmWeights::pack(w2.data(), s.exp, b.se);
+      b.fc1_bias.resize(b1.size());
+      std::copy(b1.begin(), b1.end(), b.fc1_bias.data());
+      b.fc2_bias.resize(b2.size());
+      std::copy(b2.begin(), b2.end(), b.fc2_bias.data());
+    }
+    const std::string pr = p + std::to_string(part) + ".";
+    b.project = load_conv_bn(st, pr + "0.weight", pr + "1.", conv_params(s.exp, s.cout, 1, 1), eps);
+    blocks_.push_back(std::move(b));
+  }
+  last_ = load_conv_bn(st, prefix + "16.0.weight", prefix + "16.1.", conv_params(160, kLast, 1, 1), eps);
+}
+
+void MobileNetV3Backbone::plan(int h, int w) {
+  Shape s = conv2d_output_shape({1, h, w, 3}, stem_.params());
+  scratch_ = ConvScratch();
+  scratch_.require(stem_.params(), s.w);
+  stem_out_.resize(s);
+  for (Block& b : blocks_) {
+    if (b.has_expand) {
+      scratch_.require(b.expand.params(), s.w);
+      b.a.resize({1, s.h, s.w, b.exp});
+    }
+    s = dwconv_output_shape({1, s.h, s.w, b.exp}, b.dw.params());
+    b.b.resize(s);
+    if (b.se) {
+      b.pooled.resize({1, 1, 1, b.exp});
+      b.squeezed.resize({1, 1, 1, b.se});
+      b.excited.resize({1, 1, 1, b.exp});
+    }
+    scratch_.require(b.project.params(), s.w);
+    s.c = b.cout;
+    b.out.resize(s);
+  }
+  scratch_.require(last_.params(), s.w);
+  last_out_.resize({1, s.h, s.w, kLast});
+  scratch_.allocate();
+}
+
+void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in) {
+  ConstTensorView x = in;
+  if (b.has_expand) {
+    conv2d(x, b.expand, b.a.view(), scratch_.get(), b.act);
+    x = b.a.cview();
+  }
+  dwconv(x, b.dw, b.b.view());
+  if (b.se) {
+    // Squeeze-excitation: hardsigmoid(fc2(relu(fc1(mean)))) scales every pixel.
+    global_avg_pool(b.b.cview(), b.pooled.view());
+    GemmEpilogue e1;
+    e1.bias = b.fc1_bias.data(), e1.act = Act::Relu;
+    gemm(1, b.pooled.data.data(), b.exp, b.fc1, b.squeezed.data.data(), b.se, e1);
+    GemmEpilogue e2;
+    e2.bias = b.fc2_bias.data(), e2.act = Act::HardSigmoid;
+    gemm(1, b.squeezed.data.data(), b.se, b.fc2, b.excited.data.data(), b.exp, e2);
+    const float* sc = b.excited.data.data();
+    float* d = b.b.data.data();
+    const std::size_t pixels = b.b.cview().pixels();
+    for (std::size_t px = 0; px < pixels; ++px)
+      for (int c = 0; c < b.exp; ++c) d[px * b.exp + c] *= sc[c];
+  }
+  conv2d(b.b.cview(), b.project, b.out.view(), scratch_.get(), Act::None, b.residual ? in.data : nullptr);
+}
+
+std::vector<ConstTensorView> MobileNetV3Backbone::forward(const ConstTensorView& in) {
+  conv2d(in, stem_, stem_out_.view(), scratch_.get(), Act::HardSwish);
+  ConstTensorView x = stem_out_.cview();
+  ConstTensorView c13;
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    run_block(blocks_[i], x);
+    x = blocks_[i].out.cview();
+    if (i + 1 == 13) c13 = x;
+  }
+  conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
+  return {c13, last_out_.cview()};
+}
+
+}  // namespace nn::detection

@@ -1,0 +1,45 @@
+// torchvision's MobileNetV3-Large feature extractor as the detection models build
+// it (width 1.0, no dilation, full tail; batch norm folded at load), returning the
+// two FPN inputs: features[13] (after its stride-2 depthwise stage) and features[16].
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "nn/models/detection/backbone.h"
+#include "nn/models/detection/layers.h"
+
+namespace nn::detection {
+
+class MobileNetV3Backbone : public Backbone {
+ public:
+  // prefix: "backbone.body."; eps: the frozen batch norms' epsilon.
+  MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps = 1e-5f);
+
+  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix);
+  std::vector<int> out_channels() const override { return {160, 960}; }
+
+  void plan(int h, int w) override;
+  // in: {1, h, w, 3}. Returns views of the two outputs (valid until the next call).
+  std::vector<ConstTensorView> forward(const ConstTensorView& in) override;
+
+ private:
+  struct Block {
+    int cin = 0, exp = 0, cout = 0, k = 3, stride = 1, se = 0;
+    Act act = Act::Relu;
+    bool has_expand = false, residual = false;
+    Conv2dWeights expand, project;
+    DwConvWeights dw;
+    GemmWeights fc1, fc2;
+    AlignedBuffer fc1_bias, fc2_bias;
+    Activation a, b, out, pooled, squeezed, excited;
+  };
+  void run_block(Block& blk, const ConstTensorView& in);
+
+  Conv2dWeights stem_, last_;
+  std::vector<Block> blocks_;
+  Activation stem_out_, last_out_;
+  ConvScratch scratch_;
+};
+
+}  // namespace nn::detection

@@ -1,0 +1,56 @@
+// torchvision's RoIHeads at inference: MultiScaleRoIAlign (7x7, sampling ratio 2,
+// aligned=False, level mapper over the pooled maps), TwoMLPHead, FastRCNNPredictor
+// and postprocess_detections (softmax, class-wise decode with weights (10,10,5,5),
+// clip, score > thresh, small-box removal, per-class NMS, top detections).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nn/gemm.h"
+#include "nn/models/detection/box_ops.h"
+#include "nn/models/detection/layers.h"
+#include "nn/models/detection/transform.h"
+
+namespace nn::detection {
+
+struct RoiHeadsConfig {
+  float score_thresh = 0.05f;
+  double nms_thresh = 0.5;
+  int detections_per_img = 100;
+  float min_size = 1e-2f;
+  int num_classes = 0;  // 0: as the weights hold; more than they hold is an error
+};
+
+struct Detections {
+  std::vector<Box> boxes;  // resized-image pixels until rescaled
+  std::vector<float> scores;
+  std::vector<std::int64_t> labels;
+};
+
+class RoiHeads {
+ public:
+  static constexpr int kPool = 7, kChannels = 256;
+  RoiHeads(const weights::SafeTensors& st, const std::string& prefix, const RoiHeadsConfig& cfg);
+  // Number of classes (background included) the predictor holds.
+  static int classes_in(const weights::SafeTensors& st, const std::string& prefix);
+  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, int classes, int hidden = 1024);
+  int num_classes() const { return classes_; }
+
+  // pooled: the maps the RoI pooler may sample (torchvision's '0'..'3' present).
+  void plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois);
+  Detections forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
+                     const ImageSizes& sizes);
+
+ private:
+  RoiHeadsConfig cfg_;
+  int classes_ = 0, hidden_ = 1024;
+  GemmWeights fc6_, fc7_, predictor_;
+  AlignedBuffer fc6_bias_, fc7_bias_, predictor_bias_;
+  std::vector<float> scales_;
+  int k_min_ = 0, k_max_ = 0;
+  AlignedBuffer features_, h6_, h7_, logits_;
+};
+
+}  // namespace nn::detection

@@ -1,0 +1,100 @@
+#include "nn/models/detection/rpn.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "nn/error.h"
+#include "nn/models/detection/anchors.h"
+
+namespace nn::detection {
+
+std::vector<weights::TensorSpec> Rpn::tensor_specs(const std::string& p, int a) {
+  return {{p + "conv.0.0.weight", {256, 256, 3, 3}}, {p + "conv.0.0.bias", {256}},
+          {p + "cls_logits.weight", {a, 256, 1, 1}}, {p + "cls_logits.bias", {a}},
+          {p + "bbox_pred.weight", {4 * a, 256, 1, 1}}, {p + "bbox_pred.bias", {4 * a}}};
+}
+
+Rpn::Rpn(const weights::SafeTensors& st, const std::string& p, const RpnConfig& cfg) : cfg_(cfg) {
+  if (cfg.anchor_sizes.empty()) throw Error("RPN: no anchor sizes configured");
+  a_ = static_cast<int>(cfg.anchor_sizes[0].size() * cfg.aspect_ratios.size());
+  Conv2dParams cp;
+  cp.cin = cp.cout = 256, cp.kh = cp.kw = 3, cp.pad_h = cp.pad_w = 1;
+  conv_ = load_conv(st, p + "conv.0.0.", cp);
+  std::vector<float> w = st.f32(p + "cls_logits.weight"), b = st.f32(p + "cls_logits.bias");
+  const auto bw = st.f32(p + "bbox_pred.weight"), bb = st.f32(p + "bbox_pred.bias");
+  w.insert(w.end(), bw.begin(), bw.end());
+  b.insert(b.end(), bb.begin(), bb.end());
+  heads_ = GemmWeights::pack(w.data(), 5 * a_, 256);
+  heads_bias_.resize(b.size());
+  std::copy(b.begin(), b.end(), heads_bias_.data());
+}
+
+void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
+  if (levels.size() != cfg_.anchor_sizes.size())
+    throw Error("RPN: " + std::to_string(levels.size()) + " feature maps but anchor sizes for " +
+                std::to_string(cfg_.anchor_sizes.size()));
+  hidden_.resize(levels.size());
+  head_out_.resize(levels.size());
+  anchors_.clear();
+  scratch_ = ConvScratch();
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const Shape& s = levels[l];
+    hidden_[l].resize({1, s.h, s.w, 256});
+    head_out_[l].resize({1, s.h, s.w, 5 * a_});
+    scratch_.require(conv_.params(), s.w);
+    const auto cell = cell_anchors(cfg_.anchor_sizes[l], cfg_.aspect_ratios);
+    if (static_cast<int>(cell.size()) != a_) throw Error("RPN: every level needs the same number of anchors");
+    anchors_.push_back(grid_anchors(cell, s.h, s.w, sizes.padded_h, sizes.padded_w));
+  }
+  scratch_.allocate();
+}
+
+Proposals Rpn::forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes) {
+  std::vector<Box> boxes;
+  std::vector<float> logits;
+  std::vector<int> level_of;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    conv2d(levels[l], conv_, hidden_[l].view(), scratch_.get(), Act::Relu);
+    GemmEpilogue ep;
+    ep.bias = heads_bias_.data();
+    const int pixels = static_cast<int>(hidden_[l].cview().pixels());
+    gemm_parallel(pixels, hidden_[l].data.data(), 256, heads_, head_out_[l].data.data(), 5 * a_, ep);
+    // Candidates of this level in (y, x, a) order, the order torchvision flattens them.
+    const float* out = head_out_[l].data.data();
+    const std::size_t count = static_cast<std::size_t>(pixels) * a_;
+    std::vector<float> level_logits(count);
+    for (int px = 0; px < pixels; ++px)
+      for (int a = 0; a < a_; ++a) level_logits[static_cast<std::size_t>(px) * a_ + a] = out[px * 5 * a_ + a];
+    const std::vector<int> order = argsort_descending(level_logits);
+    const std::size_t k = std::min<std::size_t>(cfg_.pre_nms_top_n, count);
+    for (std::size_t i = 0; i < k; ++i) {
+      const int idx = order[i];
+      const int px = idx / a_, a = idx % a_;
+      boxes.push_back(decode_box(anchors_[l][idx], out + px * 5 * a_ + a_ + 4 * a, BoxCoderWeights{}));
+      logits.push_back(level_logits[idx]);
+      level_of.push_back(static_cast<int>(l));
+    }
+  }
+  std::vector<Box> kept_boxes;
+  std::vector<float> kept_scores;
+  std::vector<int> kept_levels;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const float score = 1.0f / (1.0f + std::exp(-logits[i]));
+    const Box b = clip_box(boxes[i], sizes.resized_h, sizes.resized_w);
+    if (!box_big_enough(b, cfg_.min_size)) continue;
+    if (!(score >= cfg_.score_thresh)) continue;
+    kept_boxes.push_back(b);
+    kept_scores.push_back(score);
+    kept_levels.push_back(level_of[i]);
+  }
+  const std::vector<int> keep = batched_nms(kept_boxes, kept_scores, kept_levels, cfg_.nms_thresh);
+  Proposals p;
+  const std::size_t n = std::min<std::size_t>(keep.size(), cfg_.post_nms_top_n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.boxes.push_back(kept_boxes[keep[i]]);
+    p.scores.push_back(kept_scores[keep[i]]);
+  }
+  return p;
+}
+
+}  // namespace nn::detection

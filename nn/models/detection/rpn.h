@@ -1,0 +1,52 @@
+// torchvision's RegionProposalNetwork at inference: the shared head (3x3 conv + ReLU,
+// 1x1 objectness and 1x1 box deltas) on every FPN level, anchors, per-level top-k on
+// the logits, decode, sigmoid, clip, small-box removal, score threshold, NMS per
+// level and the global top-n.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "nn/gemm.h"
+#include "nn/models/detection/box_ops.h"
+#include "nn/models/detection/layers.h"
+#include "nn/models/detection/transform.h"
+
+namespace nn::detection {
+
+struct RpnConfig {
+  std::vector<std::vector<float>> anchor_sizes;  // per level
+  std::vector<float> aspect_ratios = {0.5f, 1.0f, 2.0f};
+  int pre_nms_top_n = 1000;   // per level
+  int post_nms_top_n = 1000;  // per image
+  double nms_thresh = 0.7;
+  float score_thresh = 0.0f;
+  float min_size = 1e-3f;
+};
+
+struct Proposals {
+  std::vector<Box> boxes;    // resized-image pixels, descending score
+  std::vector<float> scores;
+};
+
+class Rpn {
+ public:
+  Rpn(const weights::SafeTensors& st, const std::string& prefix, const RpnConfig& cfg);
+  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, int anchors_per_cell);
+  int anchors_per_cell() const { return a_; }
+
+  void plan(const std::vector<Shape>& levels, const ImageSizes& sizes);
+  Proposals forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes);
+
+ private:
+  RpnConfig cfg_;
+  int a_ = 0;
+  Conv2dWeights conv_;
+  GemmWeights heads_;  // objectness (A) then deltas (4A) in one product
+  AlignedBuffer heads_bias_;
+  std::vector<Activation> hidden_, head_out_;
+  std::vector<std::vector<Box>> anchors_;
+  ConvScratch scratch_;
+};
+
+}  // namespace nn::detection
