@@ -1,5 +1,7 @@
 // nnrun: runs one model of the engine on tensors from a safetensors file and writes
 // its outputs to another, as the PyTorch reference module would produce them.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -61,7 +63,8 @@ int main(int argc, char** argv) {
   args.option("input", "FILE", "input tensors as safetensors (e.g. 'input' [N,3,H,W] F32)", &input_path);
   args.option("output", "FILE", "where to write the output tensors (safetensors)", &output_path);
   args.option("threads", "N", "threads (default: all cores)", &threads);
-  args.option("repeat", "R", "run the forward pass R more times and print forward_ms min/median/max", &repeat);
+  args.option("repeat", "R", "run the forward pass R more times; print peak_rss_mb= and, last,\n"
+              "                            forward_ms min=.. median=.. max=.. (forward only, no loading or I/O)", &repeat);
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
   args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
   args.flag("quiet", "print only errors and the timing line", &quiet);
@@ -120,6 +123,11 @@ int main(int argc, char** argv) {
         ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       }
       if (profile) std::fputs(runner->profiler().table().c_str(), stdout);
+      if (repeat > 0) {
+        rusage ru{};
+        getrusage(RUSAGE_SELF, &ru);
+        std::printf("peak_rss_mb=%.1f\n", ru.ru_maxrss / 1024.0);
+      }
       if (repeat > 0)
         std::printf("forward_ms min=%.3f median=%.3f max=%.3f\n", *std::min_element(ms.begin(), ms.end()),
                     median(ms), *std::max_element(ms.begin(), ms.end()));
