@@ -3,7 +3,9 @@
 // output, compared with an absolute tolerance of 1e-5.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <map>
 
 #include "nn/error.h"
 #include "nn/models/stixelnext.h"
@@ -92,5 +94,71 @@ TEST(StixelNExTTorch, DeterministicAcrossThreadCounts) {
   nn::set_num_threads(0);
   EXPECT_EQ(0, std::memcmp(a.data(), b, n * sizeof(float)));
 }
+
+}  // namespace
+
+// Extraction end to end: stixels from our prediction against stixels from PyTorch's
+// prediction of the same image (same extraction code). Sets agree apart from
+// candidates within 1e-5 of the threshold; rows agree apart from v * H + 1 within
+// 1e-5 of an integer; depths within 1e-5 relative.
+#include "stixel/anchors.h"
+#include "stixel/extract.h"
+
+namespace {
+
+void check_extraction(const std::string& variant, double threshold) {
+  weights::SafeTensors w = reftest::load_ref("stixel_" + variant + "_weights.safetensors");
+  weights::SafeTensors c = reftest::load_ref("stixel_case_" + variant + "_small.safetensors");
+  nn::StixelNExT model(w);
+  model.plan(1, 256, 640, 80);
+  const auto x = c.f32("input");
+  const float* ours = model.forward(x.data());
+  const auto theirs = c.f32("expected");
+  const int attrs = model.head().attributes(), n = 64, u = 80, H = 256;
+  stixel::ExtractOptions opt;
+  opt.threshold = threshold;
+  opt.image_height = H;
+  const auto anchors = stixel::tangent_anchors();
+  const auto a = stixel::extract(ours, attrs, n, u, anchors, opt).stixels;
+  const auto b = stixel::extract(theirs.data(), attrs, n, u, anchors, opt).stixels;
+  // Index both by (column, candidate): candidate order within a column is the anchor order.
+  auto index = [&](const float* pred, const std::vector<stixel::Stixel>& s) {
+    std::map<std::pair<int, int>, stixel::Stixel> m;
+    std::size_t k = 0;
+    for (int col = 0; col < u; ++col)
+      for (int cand = 0; cand < n; ++cand)
+        if (pred[static_cast<std::size_t>(attrs - 1) * n * u + cand * u + col] >= threshold && k < s.size())
+          m[{col, cand}] = s[k++];
+    return m;
+  };
+  const auto ma = index(ours, a), mb = index(theirs.data(), b);
+  int compared = 0;
+  auto near_int = [](double v) { return std::fabs(v - std::round(v)) < 1e-5 * 256; };
+  for (int col = 0; col < u; ++col)
+    for (int cand = 0; cand < n; ++cand) {
+      const std::size_t pi = static_cast<std::size_t>(attrs - 1) * n * u + cand * u + col;
+      const bool in_a = ma.count({col, cand}), in_b = mb.count({col, cand});
+      if (in_a != in_b) {
+        EXPECT_LT(std::fabs(theirs[pi] - threshold), 1e-5) << variant << " column " << col << " candidate " << cand;
+        continue;
+      }
+      if (!in_a) continue;
+      const auto& sa = ma.at({col, cand});
+      const auto& sb = mb.at({col, cand});
+      const double vb = theirs[0 * n * u + cand * u + col] * static_cast<double>(H) + 1;
+      const double vt = theirs[1 * n * u + cand * u + col] * static_cast<double>(H) + 1;
+      if (!near_int(vb)) EXPECT_EQ(sa.vB, sb.vB) << variant << " column " << col << " candidate " << cand;
+      if (!near_int(vt)) EXPECT_EQ(sa.vT, sb.vT) << variant << " column " << col << " candidate " << cand;
+      EXPECT_NEAR(sa.d, sb.d, 1e-5 * sb.d);
+      EXPECT_EQ(sa.u, sb.u);
+      ++compared;
+    }
+  EXPECT_GT(compared, 100) << "too few stixels to compare";
+}
+
+TEST(StixelNExTTorch, ExtractionV4AllCandidatesMatchesTorch) { check_extraction("v4", 0.0); }
+TEST(StixelNExTTorch, ExtractionV4ThresholdMatchesTorch) { check_extraction("v4", 0.36); }
+TEST(StixelNExTTorch, ExtractionV1MatchesTorch) { check_extraction("v1", 0.36); }
+TEST(StixelNExTTorch, ExtractionV0MatchesTorch) { check_extraction("v0", 0.36); }
 
 }  // namespace
