@@ -16,20 +16,7 @@ struct Case {
 
 Case load_case(const std::string& name) {
   Case c{stxref::load("stixel_geometry_" + name + ".safetensors"), {}};
-  const auto u = stxref::i32(c.st, "u"), vT = stxref::i32(c.st, "vT"), vB = stxref::i32(c.st, "vB");
-  const auto width = stxref::i32(c.st, "width"), cluster = stxref::i32(c.st, "cluster");
-  const auto d = c.st.f32("d"), conf = c.st.f32("confidence");
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    stixel::Stixel s;
-    s.u = u[i];
-    s.vT = vT[i];
-    s.vB = vB[i];
-    s.d = d[i];
-    s.width = width[i];
-    s.confidence = conf[i];
-    s.cluster = cluster[i];
-    c.world.stixels.push_back(s);
-  }
+  c.world.stixels = stxref::stixels(c.st);
   c.world.context.calibration.K = c.st.f32("K");
   c.world.context.calibration.T = c.st.f32("T");
   c.world.context.calibration.width = std::stoi(stxref::meta(c.st, "image_width"));

@@ -13,20 +13,7 @@ void check(const std::string& tensor, const stixel::OverlayOptions& o) {
   bg.width = static_cast<int>(shape[1]);
   bg.pixels = stxref::u8(st, "background");
   stixel::StixelWorld w;
-  const auto u = stxref::i32(st, "u"), vT = stxref::i32(st, "vT"), vB = stxref::i32(st, "vB");
-  const auto width = stxref::i32(st, "width"), cluster = stxref::i32(st, "cluster");
-  const auto d = st.f32("d"), conf = st.f32("confidence");
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    stixel::Stixel s;
-    s.u = u[i];
-    s.vT = vT[i];
-    s.vB = vB[i];
-    s.d = d[i];
-    s.width = width[i];
-    s.confidence = conf[i];
-    s.cluster = cluster[i];
-    w.stixels.push_back(s);
-  }
+  w.stixels = stxref::stixels(st);
   w.context.clusters = std::stoi(stxref::meta(st, "clusters"));
   const stixel::RgbImage out = stixel::render_overlay(w, bg, o);
   const std::vector<std::uint8_t> ref = stxref::u8(st, tensor);

@@ -1,6 +1,8 @@
 // Loading the reference files tests/reference/stixel_*.py write at test time.
 #pragma once
 
+#include "stixel/world.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -51,6 +53,27 @@ inline std::string meta(const weights::SafeTensors& st, const std::string& key) 
   auto it = st.metadata().find(key);
   if (it == st.metadata().end()) throw std::runtime_error(st.source() + ": no metadata '" + key + "'");
   return it->second;
+}
+
+// The stixels a reference script stored as parallel columns u, vT, vB, d, width,
+// confidence, cluster.
+inline std::vector<stixel::Stixel> stixels(const weights::SafeTensors& st) {
+  const auto u = i32(st, "u"), vT = i32(st, "vT"), vB = i32(st, "vB");
+  const auto width = i32(st, "width"), cluster = i32(st, "cluster");
+  const auto d = st.f32("d"), conf = st.f32("confidence");
+  std::vector<stixel::Stixel> out;
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    stixel::Stixel s;
+    s.u = u[i];
+    s.vT = vT[i];
+    s.vB = vB[i];
+    s.d = d[i];
+    s.width = width[i];
+    s.confidence = conf[i];
+    s.cluster = cluster[i];
+    out.push_back(s);
+  }
+  return out;
 }
 
 }  // namespace stxref
