@@ -67,16 +67,18 @@ void mean_over_rows(const ConstTensorView& in, const TensorView& out) {
 
 Shape max_pool2d_output_shape(const Shape& in, const MaxPoolParams& p) {
   check_input("max_pool2d", in);
-  const std::string k = std::to_string(p.kh) + "x" + std::to_string(p.kw) + " stride " +
-                        std::to_string(p.stride_h) + "," + std::to_string(p.stride_w) + " pad " +
-                        std::to_string(p.pad_h) + "," + std::to_string(p.pad_w);
+  // Built only on the error paths: forward passes must not allocate.
+  auto k = [&p] {
+    return std::to_string(p.kh) + "x" + std::to_string(p.kw) + " stride " + std::to_string(p.stride_h) + "," +
+           std::to_string(p.stride_w) + " pad " + std::to_string(p.pad_h) + "," + std::to_string(p.pad_w);
+  };
   if (p.kh < 1 || p.kw < 1 || p.stride_h < 1 || p.stride_w < 1 || p.pad_h < 0 || p.pad_w < 0)
-    throw Error("max_pool2d: kernel " + k + ": sizes and strides must be positive, pads >= 0");
+    throw Error("max_pool2d: kernel " + k() + ": sizes and strides must be positive, pads >= 0");
   if (2 * p.pad_h > p.kh || 2 * p.pad_w > p.kw)
-    throw Error("max_pool2d: kernel " + k + ": pad should be at most half of the kernel size");
+    throw Error("max_pool2d: kernel " + k() + ": pad should be at most half of the kernel size");
   const int eh = in.h + 2 * p.pad_h - p.kh, ew = in.w + 2 * p.pad_w - p.kw;
   if (eh < 0 || ew < 0)
-    throw Error("max_pool2d: input " + shape_str(in) + " is smaller than kernel " + k);
+    throw Error("max_pool2d: input " + shape_str(in) + " is smaller than kernel " + k());
   return Shape{in.n, eh / p.stride_h + 1, ew / p.stride_w + 1, in.c};
 }
 

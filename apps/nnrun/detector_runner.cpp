@@ -55,6 +55,8 @@ class DetectorRunner : public Runner {
 
   void forward() override { det_ = model_.forward(input_.data()); }
 
+  bool enable_proposal_dump() override { return dump_proposals_ = true; }
+
   void write_outputs(weights::Writer& out) const override {
     const std::int64_t k = static_cast<std::int64_t>(det_.boxes.size());
     std::vector<float> boxes;
@@ -62,6 +64,17 @@ class DetectorRunner : public Runner {
     out.add_f32("boxes", {k, 4}, boxes.data());
     out.add_f32("scores", {k}, det_.scores.data());
     out.add_i64("labels", {k}, det_.labels.data());
+    if (!dump_proposals_) return;
+    // As torchvision's model.rpn returns them: the transformed (resized) image's pixels.
+    const auto& p = model_.proposals();
+    const std::int64_t n = static_cast<std::int64_t>(p.boxes.size());
+    std::vector<float> flat;
+    for (const auto& b : p.boxes) flat.insert(flat.end(), {b.x1, b.y1, b.x2, b.y2});
+    out.add_f32("proposals", {n, 4}, flat.data());
+    out.add_f32("proposal_scores", {n}, p.scores.data());
+    const auto& s = model_.sizes();
+    const std::int64_t hw[2] = {s.resized_h, s.resized_w};
+    out.add_i64("proposal_image_size", {2}, hw);
   }
 
   nn::Profiler& profiler() override { return model_.profiler(); }
@@ -72,6 +85,7 @@ class DetectorRunner : public Runner {
   std::vector<std::string> used_;
   std::vector<float> input_;
   det::Detections det_;
+  bool dump_proposals_ = false;
 };
 
 }  // namespace

@@ -51,7 +51,7 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   std::string model, weights_path, input_path, output_path, isa_name;
   int threads = 0, repeat = 0;
-  bool profile = false, quiet = false;
+  bool profile = false, quiet = false, dump_proposals = false;
 
   std::string model_list = "models:\n";
   for (const auto& m : nnrun::models()) model_list += "  " + std::string(m.name) + "\n      " + m.help + "\n";
@@ -67,6 +67,9 @@ int main(int argc, char** argv) {
               "                            forward_ms min=.. median=.. max=.. (forward only, no loading or I/O)", &repeat);
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
   args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
+  args.flag("dump-proposals", "detectors: also write the RPN proposals ('proposals' [P,4], 'proposal_scores' [P],\n"
+            "                            in the pixels of the resized image 'proposal_image_size' [2] = H,W)",
+            &dump_proposals);
   args.flag("quiet", "print only errors and the timing line", &quiet);
   for (const char* r : {"model", "weights", "input", "output"}) args.required(r);
   args.epilog(model_list +
@@ -95,6 +98,8 @@ int main(int argc, char** argv) {
       // The file's bytes are released once the model has repacked them.
       weights::SafeTensors w = weights::SafeTensors::load(weights_path);
       runner = info->make(model, w);
+      if (dump_proposals && !runner->enable_proposal_dump())
+        args.fail("--dump-proposals: model '" + model + "' has no region proposals (detectors only)");
       apps::warn_unused_tensors("nnrun", w, runner->used_tensors(), model);
     }
     {

@@ -25,6 +25,8 @@ class Runner {
   // Adds the outputs of the last forward, in PyTorch's layout.
   virtual void write_outputs(weights::Writer& out) const = 0;
   virtual nn::Profiler& profiler() = 0;
+  // Also write the RPN proposals; false when the model has none.
+  virtual bool enable_proposal_dump() { return false; }
 };
 
 struct ModelInfo {

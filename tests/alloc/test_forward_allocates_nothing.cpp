@@ -7,6 +7,7 @@
 #include <new>
 
 #include "nn/models/convnext.h"
+#include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
 #include "nn/models/stixelnext.h"
 #include "nn/models/synthetic_weights.h"
@@ -18,7 +19,11 @@ std::atomic<bool> g_counting{false};
 }  // namespace
 
 void* operator new(std::size_t n) {
-  if (g_counting) ++g_allocations;
+  if (g_counting) {
+    ++g_allocations;
+    // ROADNN_ALLOC_ABORT=1 stops at the offending allocation, so gdb's backtrace names it.
+    if (std::getenv("ROADNN_ALLOC_ABORT")) std::abort();
+  }
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
@@ -74,6 +79,33 @@ TEST(NoAllocation, StixelNExTForwardEveryHead) {
     model.forward(x.data());
     EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << nn::stixel_head_name(v);
   }
+}
+
+// The detector's whole forward, post-processing included: with the score thresholds
+// at 0 every stage (top-k, NMS on both paths, class-wise decoding) has work to do.
+TEST(NoAllocation, FasterRcnnForwardEveryVariant) {
+  namespace det = nn::detection;
+  for (auto v : {det::FasterRcnnVariant::MobileNetV3Large320Fpn, det::FasterRcnnVariant::ResNet50Fpn}) {
+    auto st = weights::SafeTensors::from_bytes(
+        nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 5).bytes(), "synthetic");
+    det::FasterRcnnConfig cfg = det::faster_rcnn_defaults(v);
+    cfg.transform.min_size = 160, cfg.transform.max_size = 256;
+    cfg.rpn.score_thresh = 0.0f;
+    cfg.roi_heads.score_thresh = 0.0f;
+    for (int threads : {1, 2}) {
+      nn::set_num_threads(threads);
+      det::FasterRcnn model(st, v, cfg);
+      model.plan(120, 200);
+      std::vector<float> x(3 * 120 * 200);
+      for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 7919) % 1000) / 1000.0f;
+      model.forward(x.data());
+      ASSERT_GT(model.proposals().boxes.size(), 100u) << "the test needs work for NMS";
+      ASSERT_GT(model.forward(x.data()).boxes.size(), 0u) << "the test needs detections";
+      EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); }))
+          << det::faster_rcnn_name(v) << ", " << threads << " threads";
+    }
+  }
+  nn::set_num_threads(0);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "nn/models/convnext.h"
+#include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/synthetic_weights.h"
 #include "weights/safetensors.h"
 
@@ -49,8 +50,9 @@ class NnrunCli : public testing::Test {
     w.add_f32("input", shape, v.data());
     w.write(path(f));
   }
-  Result run(const std::string& weights, const std::string& input, const std::string& extra = "") {
-    const std::string cmd = std::string(NNRUN_PATH) + " --model convnext --weights " + path(weights) + " --input " +
+  Result run(const std::string& weights, const std::string& input, const std::string& extra = "",
+             const std::string& model = "convnext") {
+    const std::string cmd = std::string(NNRUN_PATH) + " --model " + model + " --weights " + path(weights) + " --input " +
                             path(input) + " --output " + path("y.safetensors") + " --threads 2 " + extra +
                             " >" + path("stdout") + " 2>" + path("stderr");
     Result r;
@@ -262,6 +264,48 @@ TEST_F(NnrunCli, HelpListsModels) {
   o << std::ifstream(path("stdout")).rdbuf();
   EXPECT_NE(o.str().find("convnext_tiny"), std::string::npos);
   EXPECT_NE(o.str().find("--repeat"), std::string::npos);
+}
+
+// The detector's outputs and, with --dump-proposals, its RPN proposals: exactly what
+// the library computes for the same weights and image.
+TEST_F(NnrunCli, DetectorWritesDetectionsAndProposals) {
+  namespace det = nn::detection;
+  const auto v = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
+  write("det.safetensors", nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 4).bytes());
+  const int h = 90, w = 130;
+  std::vector<float> x(3 * h * w);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 2654435761u) % 1000) / 999.0f;
+  weights::Writer in;
+  in.add_f32("input", {1, 3, h, w}, x.data());
+  in.write(path("img.safetensors"));
+
+  Result r = run("det.safetensors", "img.safetensors", "--dump-proposals", det::faster_rcnn_name(v));
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto y = weights::SafeTensors::load(path("y.safetensors"));
+
+  auto st = weights::SafeTensors::load(path("det.safetensors"));
+  det::FasterRcnn model(st, v);
+  model.plan(h, w);
+  const det::Detections d = model.forward(x.data());
+  const auto& p = model.proposals();
+  ASSERT_GT(p.boxes.size(), 0u);
+  ASSERT_EQ(y.info("proposals").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(p.boxes.size()), 4}));
+  EXPECT_EQ(0, std::memcmp(y.f32("proposals").data(), p.boxes.data(), p.boxes.size() * sizeof(det::Box)));
+  EXPECT_EQ(y.f32("proposal_scores"), p.scores);
+  EXPECT_EQ(y.i64("proposal_image_size"), (std::vector<std::int64_t>{model.sizes().resized_h, model.sizes().resized_w}));
+  ASSERT_EQ(y.info("boxes").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(d.boxes.size()), 4}));
+  EXPECT_EQ(0, std::memcmp(y.f32("boxes").data(), d.boxes.data(), d.boxes.size() * sizeof(det::Box)));
+  EXPECT_EQ(y.f32("scores"), d.scores);
+  EXPECT_EQ(y.i64("labels"), d.labels);
+
+  // Without the flag there are no proposals; a model without an RPN refuses the flag.
+  ASSERT_EQ(run("det.safetensors", "img.safetensors", "", det::faster_rcnn_name(v)).code, 0);
+  EXPECT_FALSE(weights::SafeTensors::load(path("y.safetensors")).has("proposals"));
+  std::remove(path("y.safetensors").c_str());
+  r = run("w.safetensors", "x.safetensors", "--dump-proposals");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--dump-proposals"), std::string::npos) << r.err;
+  EXPECT_FALSE(output_exists());
 }
 
 }  // namespace

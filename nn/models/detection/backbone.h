@@ -13,7 +13,7 @@ class Backbone {
   virtual std::vector<int> out_channels() const = 0;
   virtual void plan(int h, int w) = 0;
   // in: {1, h, w, 3}. Views stay valid until the next forward.
-  virtual std::vector<ConstTensorView> forward(const ConstTensorView& in) = 0;
+  virtual const std::vector<ConstTensorView>& forward(const ConstTensorView& in) = 0;
 };
 
 }  // namespace nn::detection

@@ -110,6 +110,14 @@ void FasterRcnn::plan(int h, int w) {
   rpn_.plan(ps, sizes_);
   ps.pop_back();  // 'pool' feeds only the RPN
   roi_heads_.plan(ps, sizes_, cfg_.rpn.post_nms_top_n);
+  pooled_.reserve(pyramid.size());
+  const std::size_t rois = static_cast<std::size_t>(std::max(cfg_.rpn.post_nms_top_n, 0));
+  proposals_.boxes.reserve(rois);
+  proposals_.scores.reserve(rois);
+  const std::size_t kept = static_cast<std::size_t>(std::max(cfg_.roi_heads.detections_per_img, 0));
+  detections_.boxes.reserve(kept);
+  detections_.scores.reserve(kept);
+  detections_.labels.reserve(kept);
   planned_h_ = h, planned_w_ = w;
   profiler_.clear();
   prof_transform_ = profiler_.add("transform", "normalise+resize+pad", "", 0);
@@ -119,36 +127,41 @@ void FasterRcnn::plan(int h, int w) {
   prof_roi_ = profiler_.add("roi_heads", "roi_align+mlp+postprocess", "", 0);
 }
 
-Detections FasterRcnn::forward(const float* image) {
+const Detections& FasterRcnn::forward(const float* image) {
   if (planned_h_ == 0) throw Error("FasterRcnn::forward before plan()");
   {
     Profiler::Scope t(&profiler_, prof_transform_);
     transform_image(image, sizes_, cfg_.transform, normalised_.data.data(), resized_.data.data(), input_.view());
   }
-  std::vector<ConstTensorView> feats, pyramid;
+  const std::vector<ConstTensorView>* feats;
+  const std::vector<ConstTensorView>* pyramid;
   {
     Profiler::Scope t(&profiler_, prof_backbone_);
-    feats = backbone_->forward(input_.cview());
+    feats = &backbone_->forward(input_.cview());
   }
   {
     Profiler::Scope t(&profiler_, prof_fpn_);
-    pyramid = fpn_.forward(feats);
+    pyramid = &fpn_.forward(*feats);
   }
   {
     Profiler::Scope t(&profiler_, prof_rpn_);
-    proposals_ = rpn_.forward(pyramid, sizes_);
+    const Proposals& p = rpn_.forward(*pyramid, sizes_);
+    proposals_.boxes.assign(p.boxes.begin(), p.boxes.end());
+    proposals_.scores.assign(p.scores.begin(), p.scores.end());
   }
-  Detections det;
   {
     Profiler::Scope t(&profiler_, prof_roi_);
-    pyramid.pop_back();
-    det = roi_heads_.forward(pyramid, proposals_.boxes, sizes_);
+    pooled_.assign(pyramid->begin(), pyramid->end() - 1);  // 'pool' feeds only the RPN
+    const Detections& det = roi_heads_.forward(pooled_, proposals_.boxes, sizes_);
     // transform.postprocess: ratios original / resized, each a float32 division.
     const float rh = static_cast<float>(sizes_.orig_h) / static_cast<float>(sizes_.resized_h);
     const float rw = static_cast<float>(sizes_.orig_w) / static_cast<float>(sizes_.resized_w);
-    for (Box& b : det.boxes) b = {b.x1 * rw, b.y1 * rh, b.x2 * rw, b.y2 * rh};
+    detections_.boxes.clear();
+    for (const Box& b : det.boxes) detections_.boxes.push_back({b.x1 * rw, b.y1 * rh, b.x2 * rw, b.y2 * rh});
+    detections_.scores.assign(det.scores.begin(), det.scores.end());
+    detections_.labels.assign(det.labels.begin(), det.labels.end());
   }
-  return det;
+  return detections_;
 }
 
 }  // namespace nn::detection

@@ -49,8 +49,9 @@ class FasterRcnn {
 
   // Plans every buffer for h x w inputs (throws below 32 px).
   void plan(int h, int w);
-  // image: [3, h, w] RGB in [0, 1]. Boxes in original-image pixels.
-  Detections forward(const float* image);
+  // image: [3, h, w] RGB in [0, 1]. Boxes in original-image pixels. The result
+  // stays valid until the next forward; nothing is allocated once planned.
+  const Detections& forward(const float* image);
 
   // Intermediate results of the last forward, for tests and --dump-proposals.
   const ImageSizes& sizes() const { return sizes_; }
@@ -68,6 +69,8 @@ class FasterRcnn {
   ImageSizes sizes_;
   Activation input_, normalised_, resized_;
   Proposals proposals_;
+  std::vector<ConstTensorView> pooled_;  // the pyramid without 'pool'
+  Detections detections_;
   Profiler profiler_;
   int planned_h_ = 0, planned_w_ = 0;
   int prof_transform_ = 0, prof_backbone_ = 0, prof_fpn_ = 0, prof_rpn_ = 0, prof_roi_ = 0;

@@ -58,9 +58,10 @@ void Fpn::plan(const std::vector<Shape>& inputs) {
   const Shape last = out_[n - 1].shape;
   pool_.resize({1, (last.h - 1) / 2 + 1, (last.w - 1) / 2 + 1, kChannels});
   scratch_.allocate();
+  result_.reserve(inputs.size() + 1);
 }
 
-std::vector<ConstTensorView> Fpn::forward(const std::vector<ConstTensorView>& x) {
+const std::vector<ConstTensorView>& Fpn::forward(const std::vector<ConstTensorView>& x) {
   const std::size_t n = x.size();
   conv2d(x[n - 1], inner_[n - 1], inner_out_[n - 1].view(), scratch_.get());
   conv2d(inner_out_[n - 1].cview(), layer_[n - 1], out_[n - 1].view(), scratch_.get());
@@ -77,10 +78,10 @@ std::vector<ConstTensorView> Fpn::forward(const std::vector<ConstTensorView>& x)
       const float* src = out_[n - 1].cview().pixel(0, 2 * y, 2 * xx);
       std::copy(src, src + last.c, pool_.view().pixel(0, y, xx));
     }
-  std::vector<ConstTensorView> result;
-  for (auto& o : out_) result.push_back(o.cview());
-  result.push_back(pool_.cview());
-  return result;
+  result_.clear();
+  for (auto& o : out_) result_.push_back(o.cview());
+  result_.push_back(pool_.cview());
+  return result_;
 }
 
 }  // namespace nn::detection

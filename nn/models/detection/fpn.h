@@ -17,13 +17,15 @@ class Fpn {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, const std::vector<int>& in_channels);
 
   void plan(const std::vector<Shape>& inputs);
-  std::vector<ConstTensorView> forward(const std::vector<ConstTensorView>& inputs);
+  // Views stay valid until the next forward.
+  const std::vector<ConstTensorView>& forward(const std::vector<ConstTensorView>& inputs);
 
  private:
   std::vector<Conv2dWeights> inner_, layer_;
   std::vector<Activation> inner_out_, upsampled_, out_;
   Activation pool_;
   ConvScratch scratch_;
+  std::vector<ConstTensorView> result_;
 };
 
 }  // namespace nn::detection

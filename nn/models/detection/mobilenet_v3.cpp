@@ -134,6 +134,7 @@ void MobileNetV3Backbone::plan(int h, int w) {
   scratch_.require(last_.params(), s.w);
   last_out_.resize({1, s.h, s.w, kLast});
   scratch_.allocate();
+  outs_.reserve(2);
 }
 
 void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in) {
@@ -161,7 +162,7 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in) {
   conv2d(b.b.cview(), b.project, b.out.view(), scratch_.get(), Act::None, b.residual ? in.data : nullptr);
 }
 
-std::vector<ConstTensorView> MobileNetV3Backbone::forward(const ConstTensorView& in) {
+const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTensorView& in) {
   conv2d(in, stem_, stem_out_.view(), scratch_.get(), Act::HardSwish);
   ConstTensorView x = stem_out_.cview();
   ConstTensorView c13;
@@ -171,7 +172,8 @@ std::vector<ConstTensorView> MobileNetV3Backbone::forward(const ConstTensorView&
     if (i + 1 == 13) c13 = x;
   }
   conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
-  return {c13, last_out_.cview()};
+  outs_.assign({c13, last_out_.cview()});
+  return outs_;
 }
 
 }  // namespace nn::detection

@@ -21,7 +21,7 @@ class MobileNetV3Backbone : public Backbone {
 
   void plan(int h, int w) override;
   // in: {1, h, w, 3}. Returns views of the two outputs (valid until the next call).
-  std::vector<ConstTensorView> forward(const ConstTensorView& in) override;
+  const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 
  private:
   struct Block {
@@ -40,6 +40,7 @@ class MobileNetV3Backbone : public Backbone {
   std::vector<Block> blocks_;
   Activation stem_out_, last_out_;
   ConvScratch scratch_;
+  std::vector<ConstTensorView> outs_;
 };
 
 }  // namespace nn::detection

@@ -85,13 +85,14 @@ void ResNet50Backbone::plan(int h, int w) {
       s = o;
     }
   scratch_.allocate();
+  outs_.reserve(layers_.size());
 }
 
-std::vector<ConstTensorView> ResNet50Backbone::forward(const ConstTensorView& in) {
+const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorView& in) {
   conv2d(in, stem_, stem_out_.view(), scratch_.get(), Act::Relu);
   max_pool2d(stem_out_.cview(), MaxPoolParams{}, pooled_.view());
   ConstTensorView x = pooled_.cview();
-  std::vector<ConstTensorView> outs;
+  outs_.clear();
   for (auto& layer : layers_) {
     for (Bottleneck& b : layer) {
       conv2d(x, b.conv1, b.a.view(), scratch_.get(), Act::Relu);
@@ -105,9 +106,9 @@ std::vector<ConstTensorView> ResNet50Backbone::forward(const ConstTensorView& in
       conv2d(b.b.cview(), b.conv3, b.out.view(), scratch_.get(), Act::Relu, identity, true);
       x = b.out.cview();
     }
-    outs.push_back(x);
+    outs_.push_back(x);
   }
-  return outs;
+  return outs_;
 }
 
 }  // namespace nn::detection

@@ -19,7 +19,7 @@ class ResNet50Backbone : public Backbone {
 
   std::vector<int> out_channels() const override { return {256, 512, 1024, 2048}; }
   void plan(int h, int w) override;
-  std::vector<ConstTensorView> forward(const ConstTensorView& in) override;
+  const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 
  private:
   struct Bottleneck {
@@ -31,6 +31,7 @@ class ResNet50Backbone : public Backbone {
   Activation stem_out_, pooled_;
   std::vector<std::vector<Bottleneck>> layers_;
   ConvScratch scratch_;
+  std::vector<ConstTensorView> outs_;
 };
 
 }  // namespace nn::detection

@@ -60,7 +60,13 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   const int grid_h = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_h / p.out_h));
   const int grid_w = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_w / p.out_w));
   const float count = static_cast<float>(std::max(grid_h * grid_w, 1));
-  std::vector<Sample> samples(static_cast<std::size_t>(grid_h) * grid_w);
+  // The models' fixed sampling ratio fits on the stack; only adaptive sampling of
+  // large RoIs needs the heap.
+  const std::size_t sample_count = static_cast<std::size_t>(grid_h) * grid_w;
+  Sample on_stack[16];
+  std::vector<Sample> on_heap;
+  Sample* samples = on_stack;
+  if (sample_count > 16) on_heap.resize(sample_count), samples = on_heap.data();
   for (int ph = 0; ph < p.out_h; ++ph)
     for (int pw = 0; pw < p.out_w; ++pw) {
       std::size_t k = 0;
@@ -74,7 +80,8 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
       // Channels innermost (NHWC): per channel the samples still add in torchvision's order.
       float* o = out + (static_cast<std::size_t>(ph) * p.out_w + pw) * channels;
       std::fill(o, o + channels, 0.0f);
-      for (const Sample& s : samples) {
+      for (std::size_t k2 = 0; k2 < sample_count; ++k2) {
+        const Sample& s = samples[k2];
         const float* v1 = base + static_cast<std::size_t>(s.p1) * channels;
         const float* v2 = base + static_cast<std::size_t>(s.p2) * channels;
         const float* v3 = base + static_cast<std::size_t>(s.p3) * channels;

@@ -81,12 +81,24 @@ void RoiHeads::plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, i
   h6_.resize(rois * hidden_);
   h7_.resize(rois * hidden_);
   logits_.resize(rois * 5 * classes_);
+  const std::size_t candidates = rois * static_cast<std::size_t>(classes_);
+  boxes_.reserve(candidates);
+  scores_.reserve(candidates);
+  labels_.reserve(candidates);
+  keep_.reserve(candidates);
+  nms_.reserve(candidates);
+  prob_.resize(classes_);
+  const std::size_t kept = static_cast<std::size_t>(std::max(cfg_.detections_per_img, 0));
+  result_.boxes.reserve(kept);
+  result_.scores.reserve(kept);
+  result_.labels.reserve(kept);
 }
 
-Detections RoiHeads::forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
-                             const ImageSizes& sizes) {
+const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
+                                    const ImageSizes& sizes) {
   const int r = static_cast<int>(proposals.size());
-  Detections det;
+  Detections& det = result_;
+  det.boxes.clear(), det.scores.clear(), det.labels.clear();
   if (r == 0) return det;
   if (static_cast<std::size_t>(r) * hidden_ > h6_.size()) throw Error("RoI heads: more proposals than planned");
   const std::size_t per_roi = static_cast<std::size_t>(kChannels) * kPool * kPool;
@@ -119,11 +131,9 @@ Detections RoiHeads::forward(const std::vector<ConstTensorView>& pooled, const s
   const int c = classes_;
   gemm_parallel(r, h7_.data(), hidden_, predictor_, logits_.data(), 5 * c, ep);
 
-  std::vector<Box> boxes;
-  std::vector<float> scores;
-  std::vector<int> labels;
+  boxes_.clear(), scores_.clear(), labels_.clear();
   const BoxCoderWeights weights{10.0f, 10.0f, 5.0f, 5.0f};
-  std::vector<float> prob(c);
+  float* prob = prob_.data();
   for (int i = 0; i < r; ++i) {
     const float* row = logits_.data() + static_cast<std::size_t>(i) * 5 * c;
     float mx = row[0];
@@ -135,17 +145,17 @@ Detections RoiHeads::forward(const std::vector<ConstTensorView>& pooled, const s
       if (!(prob[k] > cfg_.score_thresh)) continue;
       const Box b = clip_box(decode_box(proposals[i], row + c + 4 * k, weights), sizes.resized_h, sizes.resized_w);
       if (!box_big_enough(b, cfg_.min_size)) continue;
-      boxes.push_back(b);
-      scores.push_back(prob[k]);
-      labels.push_back(k);
+      boxes_.push_back(b);
+      scores_.push_back(prob[k]);
+      labels_.push_back(k);
     }
   }
-  const std::vector<int> keep = batched_nms(boxes, scores, labels, cfg_.nms_thresh);
-  const std::size_t n = std::min<std::size_t>(keep.size(), cfg_.detections_per_img);
+  batched_nms(boxes_, scores_, labels_, cfg_.nms_thresh, nms_, keep_);
+  const std::size_t n = std::min<std::size_t>(keep_.size(), static_cast<std::size_t>(std::max(cfg_.detections_per_img, 0)));
   for (std::size_t i = 0; i < n; ++i) {
-    det.boxes.push_back(boxes[keep[i]]);
-    det.scores.push_back(scores[keep[i]]);
-    det.labels.push_back(labels[keep[i]]);
+    det.boxes.push_back(boxes_[keep_[i]]);
+    det.scores.push_back(scores_[keep_[i]]);
+    det.labels.push_back(labels_[keep_[i]]);
   }
   return det;
 }

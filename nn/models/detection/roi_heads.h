@@ -40,8 +40,9 @@ class RoiHeads {
 
   // pooled: the maps the RoI pooler may sample (torchvision's '0'..'3' present).
   void plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois);
-  Detections forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
-                     const ImageSizes& sizes);
+  // The result stays valid until the next forward; no allocation once planned.
+  const Detections& forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
+                            const ImageSizes& sizes);
 
  private:
   RoiHeadsConfig cfg_;
@@ -51,6 +52,12 @@ class RoiHeads {
   std::vector<float> scales_;
   int k_min_ = 0, k_max_ = 0;
   AlignedBuffer features_, h6_, h7_, logits_;
+  // Post-processing scratch, sized at plan time.
+  std::vector<Box> boxes_;
+  std::vector<float> scores_, prob_;
+  std::vector<int> labels_, keep_;
+  NmsWorkspace nms_;
+  Detections result_;
 };
 
 }  // namespace nn::detection

@@ -37,6 +37,7 @@ void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
   head_out_.resize(levels.size());
   anchors_.clear();
   scratch_ = ConvScratch();
+  std::size_t largest = 0, candidates = 0;
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const Shape& s = levels[l];
     hidden_[l].resize({1, s.h, s.w, 256});
@@ -45,14 +46,23 @@ void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
     const auto cell = cell_anchors(cfg_.anchor_sizes[l], cfg_.aspect_ratios);
     if (static_cast<int>(cell.size()) != a_) throw Error("RPN: every level needs the same number of anchors");
     anchors_.push_back(grid_anchors(cell, s.h, s.w, sizes.padded_h, sizes.padded_w));
+    const std::size_t count = static_cast<std::size_t>(s.h) * s.w * a_;
+    largest = std::max(largest, count);
+    candidates += std::min<std::size_t>(count, static_cast<std::size_t>(std::max(cfg_.pre_nms_top_n, 0)));
   }
   scratch_.allocate();
+  level_logits_.reserve(largest);
+  order_.reserve(largest);
+  for (auto* v : {&logits_, &kept_scores_}) v->reserve(candidates);
+  for (auto* v : {&level_of_, &kept_levels_, &keep_}) v->reserve(candidates);
+  for (auto* v : {&boxes_, &kept_boxes_}) v->reserve(candidates);
+  nms_.reserve(candidates);
+  result_.boxes.reserve(candidates);
+  result_.scores.reserve(candidates);
 }
 
-Proposals Rpn::forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes) {
-  std::vector<Box> boxes;
-  std::vector<float> logits;
-  std::vector<int> level_of;
+const Proposals& Rpn::forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes) {
+  boxes_.clear(), logits_.clear(), level_of_.clear();
   for (std::size_t l = 0; l < levels.size(); ++l) {
     conv2d(levels[l], conv_, hidden_[l].view(), scratch_.get(), Act::Relu);
     GemmEpilogue ep;
@@ -62,39 +72,37 @@ Proposals Rpn::forward(const std::vector<ConstTensorView>& levels, const ImageSi
     // Candidates of this level in (y, x, a) order, the order torchvision flattens them.
     const float* out = head_out_[l].data.data();
     const std::size_t count = static_cast<std::size_t>(pixels) * a_;
-    std::vector<float> level_logits(count);
+    level_logits_.resize(count);
     for (int px = 0; px < pixels; ++px)
-      for (int a = 0; a < a_; ++a) level_logits[static_cast<std::size_t>(px) * a_ + a] = out[px * 5 * a_ + a];
-    const std::vector<int> order = argsort_descending(level_logits);
-    const std::size_t k = std::min<std::size_t>(cfg_.pre_nms_top_n, count);
+      for (int a = 0; a < a_; ++a) level_logits_[static_cast<std::size_t>(px) * a_ + a] = out[px * 5 * a_ + a];
+    const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(std::max(cfg_.pre_nms_top_n, 0)), count);
+    top_k_descending(level_logits_.data(), count, k, order_);
     for (std::size_t i = 0; i < k; ++i) {
-      const int idx = order[i];
+      const int idx = order_[i];
       const int px = idx / a_, a = idx % a_;
-      boxes.push_back(decode_box(anchors_[l][idx], out + px * 5 * a_ + a_ + 4 * a, BoxCoderWeights{}));
-      logits.push_back(level_logits[idx]);
-      level_of.push_back(static_cast<int>(l));
+      boxes_.push_back(decode_box(anchors_[l][idx], out + px * 5 * a_ + a_ + 4 * a, BoxCoderWeights{}));
+      logits_.push_back(level_logits_[idx]);
+      level_of_.push_back(static_cast<int>(l));
     }
   }
-  std::vector<Box> kept_boxes;
-  std::vector<float> kept_scores;
-  std::vector<int> kept_levels;
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    const float score = 1.0f / (1.0f + std::exp(-logits[i]));
-    const Box b = clip_box(boxes[i], sizes.resized_h, sizes.resized_w);
+  kept_boxes_.clear(), kept_scores_.clear(), kept_levels_.clear();
+  for (std::size_t i = 0; i < boxes_.size(); ++i) {
+    const float score = 1.0f / (1.0f + std::exp(-logits_[i]));
+    const Box b = clip_box(boxes_[i], sizes.resized_h, sizes.resized_w);
     if (!box_big_enough(b, cfg_.min_size)) continue;
     if (!(score >= cfg_.score_thresh)) continue;
-    kept_boxes.push_back(b);
-    kept_scores.push_back(score);
-    kept_levels.push_back(level_of[i]);
+    kept_boxes_.push_back(b);
+    kept_scores_.push_back(score);
+    kept_levels_.push_back(level_of_[i]);
   }
-  const std::vector<int> keep = batched_nms(kept_boxes, kept_scores, kept_levels, cfg_.nms_thresh);
-  Proposals p;
-  const std::size_t n = std::min<std::size_t>(keep.size(), cfg_.post_nms_top_n);
+  batched_nms(kept_boxes_, kept_scores_, kept_levels_, cfg_.nms_thresh, nms_, keep_);
+  result_.boxes.clear(), result_.scores.clear();
+  const std::size_t n = std::min<std::size_t>(keep_.size(), static_cast<std::size_t>(std::max(cfg_.post_nms_top_n, 0)));
   for (std::size_t i = 0; i < n; ++i) {
-    p.boxes.push_back(kept_boxes[keep[i]]);
-    p.scores.push_back(kept_scores[keep[i]]);
+    result_.boxes.push_back(kept_boxes_[keep_[i]]);
+    result_.scores.push_back(kept_scores_[keep_[i]]);
   }
-  return p;
+  return result_;
 }
 
 }  // namespace nn::detection

@@ -36,7 +36,8 @@ class Rpn {
   int anchors_per_cell() const { return a_; }
 
   void plan(const std::vector<Shape>& levels, const ImageSizes& sizes);
-  Proposals forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes);
+  // The result stays valid until the next forward; no allocation once planned.
+  const Proposals& forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes);
 
  private:
   RpnConfig cfg_;
@@ -47,6 +48,12 @@ class Rpn {
   std::vector<Activation> hidden_, head_out_;
   std::vector<std::vector<Box>> anchors_;
   ConvScratch scratch_;
+  // Post-processing scratch, sized at plan time.
+  std::vector<float> level_logits_, logits_, kept_scores_;
+  std::vector<int> order_, level_of_, kept_levels_, keep_;
+  std::vector<Box> boxes_, kept_boxes_;
+  NmsWorkspace nms_;
+  Proposals result_;
 };
 
 }  // namespace nn::detection
