@@ -60,11 +60,41 @@ Shape conv2d_output_shape(const Shape& in, const Conv2dParams& p) {
   return s;
 }
 
+int conv2d_block_rows(int out_w) { return out_w >= kConvBlockPixels ? 1 : (kConvBlockPixels + out_w - 1) / out_w; }
+
 std::size_t conv2d_scratch_floats(const Conv2dParams& p, int out_w) {
   if (p.kh == 1 && p.kw == 1 && p.stride_h == 1 && p.stride_w == 1 && p.pad_h == 0 && p.pad_w == 0)
     return 0;
-  return static_cast<std::size_t>(out_w) * p.kh * p.kw * p.cin;
+  return static_cast<std::size_t>(conv2d_block_rows(out_w)) * out_w * p.kh * p.kw * p.cin;
 }
+
+namespace {
+
+// im2col of output row oy into `col`: row ox holds the (ky, kx, c) patch, zeros outside.
+void im2col_row(const ConstTensorView& in, const Conv2dParams& p, int n, int oy, int ow, float* col) {
+  const int cin = p.cin, k = p.kh * p.kw * cin;
+  for (int ox = 0; ox < ow; ++ox, col += k) {
+    const int ix0 = ox * p.stride_w - p.pad_w;
+    for (int ky = 0; ky < p.kh; ++ky) {
+      const int iy = oy * p.stride_h - p.pad_h + ky;
+      float* row = col + static_cast<std::size_t>(ky) * p.kw * cin;
+      if (iy < 0 || iy >= in.shape.h) {
+        std::memset(row, 0, sizeof(float) * p.kw * cin);
+        continue;
+      }
+      // Columns [kx_lo, kx_hi) of this kernel row fall inside the image.
+      const int kx_lo = std::min(p.kw, std::max(0, -ix0));
+      const int kx_hi = std::max(kx_lo, std::min(p.kw, in.shape.w - ix0));
+      std::memset(row, 0, sizeof(float) * kx_lo * cin);
+      if (kx_hi > kx_lo)
+        std::memcpy(row + static_cast<std::size_t>(kx_lo) * cin, in.pixel(n, iy, ix0 + kx_lo),
+                    sizeof(float) * (kx_hi - kx_lo) * cin);
+      std::memset(row + static_cast<std::size_t>(kx_hi) * cin, 0, sizeof(float) * (p.kw - kx_hi) * cin);
+    }
+  }
+}
+
+}  // namespace
 
 void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out, int n,
                  int y0, int y1, float* scratch, Act act, const float* residual,
@@ -72,41 +102,24 @@ void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const Tensor
   const Conv2dParams& p = w.params();
   const int ow = out.shape.w, cin = p.cin;
   const int k = p.kh * p.kw * cin;
+  const int block = conv2d_block_rows(ow);
   GemmEpilogue ep;
   ep.bias = w.bias();
   ep.act = act;
   ep.act_after_residual = act_after_residual;
   ep.ldr = out.shape.c;
-  for (int oy = y0; oy < y1; ++oy) {
+  // Output rows of an NHWC image are contiguous, so a block of rows is one product
+  // with M = rows * ow; the K summation order does not depend on M.
+  for (int oy = y0; oy < y1; oy += block) {
+    const int rows = std::min(block, y1 - oy);
     float* dst = out.pixel(n, oy, 0);
     ep.residual = residual ? residual + (dst - out.data) : nullptr;
     if (w.is_pointwise()) {
-      gemm(ow, in.pixel(n, oy, 0), cin, w.gemm(), dst, out.shape.c, ep);
+      gemm(rows * ow, in.pixel(n, oy, 0), cin, w.gemm(), dst, out.shape.c, ep);
       continue;
     }
-    // im2col of one output row: row ox holds the (ky, kx, c) patch, zeros outside.
-    for (int ox = 0; ox < ow; ++ox) {
-      float* col = scratch + static_cast<std::size_t>(ox) * k;
-      const int ix0 = ox * p.stride_w - p.pad_w;
-      for (int ky = 0; ky < p.kh; ++ky) {
-        const int iy = oy * p.stride_h - p.pad_h + ky;
-        float* row = col + static_cast<std::size_t>(ky) * p.kw * cin;
-        if (iy < 0 || iy >= in.shape.h) {
-          std::memset(row, 0, sizeof(float) * p.kw * cin);
-          continue;
-        }
-        // Columns [kx_lo, kx_hi) of this kernel row fall inside the image.
-        const int kx_lo = std::min(p.kw, std::max(0, -ix0));
-        const int kx_hi = std::max(kx_lo, std::min(p.kw, in.shape.w - ix0));
-        std::memset(row, 0, sizeof(float) * kx_lo * cin);
-        if (kx_hi > kx_lo)
-          std::memcpy(row + static_cast<std::size_t>(kx_lo) * cin, in.pixel(n, iy, ix0 + kx_lo),
-                      sizeof(float) * (kx_hi - kx_lo) * cin);
-        std::memset(row + static_cast<std::size_t>(kx_hi) * cin, 0,
-                    sizeof(float) * (p.kw - kx_hi) * cin);
-      }
-    }
-    gemm(ow, scratch, k, w.gemm(), dst, out.shape.c, ep);
+    for (int r = 0; r < rows; ++r) im2col_row(in, p, n, oy + r, ow, scratch + static_cast<std::size_t>(r) * ow * k);
+    gemm(rows * ow, scratch, k, w.gemm(), dst, out.shape.c, ep);
   }
 }
 
@@ -115,14 +128,22 @@ void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView&
   if (in.shape.c != w.params().cin || out.shape != conv2d_output_shape(in.shape, w.params()))
     throw Error("conv2d: tensor shapes do not match the convolution");
   const std::size_t per_thread = conv2d_scratch_floats(w.params(), out.shape.w);
-  const int rows = out.shape.n * out.shape.h;
+  // Blocks of at most conv2d_block_rows() rows, as many per image as a multiple of the
+  // team so no thread idles on small maps (the result does not depend on the split).
+  const int team = std::max(1, num_threads()), h = out.shape.h;
+  const int max_block = conv2d_block_rows(out.shape.w);
+  const int wanted = team * ((h + team * max_block - 1) / (team * max_block));
+  const int block = std::max(1, (h + wanted - 1) / wanted);
+  const int blocks_per_image = (h + block - 1) / block;
+  const int blocks = out.shape.n * blocks_per_image;
 #ifdef ROADNN_OPENMP
 #pragma omp parallel for schedule(static)
 #endif
-  for (int r = 0; r < rows; ++r) {
+  for (int b = 0; b < blocks; ++b) {
     float* mine = scratch ? scratch + per_thread * thread_index() : nullptr;
-    conv2d_rows(in, w, out, r / out.shape.h, r % out.shape.h, r % out.shape.h + 1, mine, act,
-                residual, act_after_residual);
+    const int n = b / blocks_per_image, y0 = (b % blocks_per_image) * block;
+    const int y1 = std::min(h, y0 + block);
+    conv2d_rows(in, w, out, n, y0, y1, mine, act, residual, act_after_residual);
   }
 }
 

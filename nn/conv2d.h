@@ -41,10 +41,18 @@ class Conv2dWeights {
 
 Shape conv2d_output_shape(const Shape& in, const Conv2dParams& p);
 
-// Floats of scratch one thread needs for an output row of width out_w.
+// Output rows one matrix product covers: enough rows of width out_w for about
+// kConvBlockPixels pixels, so narrow deep layers do not stream their whole weight
+// matrix from L3 for a few dozen pixels.
+constexpr int kConvBlockPixels = 128;
+int conv2d_block_rows(int out_w);
+
+// Floats of scratch one thread needs for one block of conv2d_block_rows(out_w)
+// output rows of width out_w.
 std::size_t conv2d_scratch_floats(const Conv2dParams& p, int out_w);
 
-// Output rows [y0, y1) of image n, single-threaded. `residual` (same shape as out,
+// Output rows [y0, y1) of image n, single-threaded, in blocks of
+// conv2d_block_rows(out.shape.w) rows. `residual` (same shape as out,
 // may alias it) is added per nn/gemm.h's epilogue order; act_after_residual likewise.
 void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out, int n,
                  int y0, int y1, float* scratch, Act act = Act::None,
