@@ -188,10 +188,12 @@ int main(int argc, char** argv) {
     }
     shle::Sequence seq = shle::scan_sequence(sequence);
     std::unique_ptr<shle::BoxSource> source;
+    shleapp::DetectorDescription det_desc;
     if (boxes == "annotations") {
       source = std::make_unique<shle::AnnotationBoxSource>();
     } else if (detector) {
       auto d = std::make_unique<shle::DetectorBoxSource>(det_weights, det_variant, det_opt);
+      det_desc = {nn::detection::faster_rcnn_name(det_variant), det_weights, d->num_classes(), d->labels(), det_score};
       std::string labels;
       for (int l : d->labels()) labels += (labels.empty() ? "" : ",") + std::to_string(l);
       std::fprintf(stderr, "shle: detector %s, %d classes (device labels %s, score > %g), weights %s\n",
@@ -224,7 +226,8 @@ int main(int argc, char** argv) {
     }
 
     std::string csv = shleapp::frames_csv(run);
-    shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt};
+    shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt,
+                                 det_desc};
     std::string summary = shleapp::summary_json(run, desc);
     shleapp::HeightPlotData plot;
     plot.frames = static_cast<int>(run.frames.size());

@@ -114,6 +114,7 @@ TEST(ShleApp, BoxesFileAndOptions) {
   EXPECT_EQ(csv.find("nan"), std::string::npos);
   json::Value s = json::parse(slurp(dir / "o/summary.json"), "s");
   EXPECT_EQ(s.get("box_source")->str(), "boxes-file");
+  EXPECT_EQ(s.get("detector"), nullptr);
   EXPECT_TRUE(s.get("options")->get("kalman_compat")->boolean());
   EXPECT_TRUE(s.get("gt_height")->is_null());
 }
@@ -223,6 +224,12 @@ TEST(ShleApp, DetectorBoxes) {
   EXPECT_GT(detector_frames, 0) << slurp(out + "/frames.csv");
   json::Value s = json::parse(slurp(out + "/summary.json"), "s");
   EXPECT_EQ(s.get("box_source")->str(), "detector");
+  const json::Value* d = s.get("detector");
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->get("model")->str(), "fasterrcnn_mobilenet_v3_large_320_fpn");
+  EXPECT_EQ(d->get("weights")->str(), detector_weights());
+  EXPECT_EQ(d->get("classes")->number(), 2);
+  EXPECT_EQ(d->get("score_threshold")->number(), 0);
 }
 
 TEST(ShleApp, DetectorErrors) {
