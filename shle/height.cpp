@@ -146,6 +146,13 @@ HeightResult HeightEstimator::estimate(const DisparityMap& disp, const Box& box)
   }
   const int W = disp.width, H = disp.height;
   r.window = extend_and_clip(box, opt_.extend_top, opt_.extend_bottom, W, H);
+  // A boxes CSV may hold x1 == x0 or y1 == y0: said plainly rather than as
+  // "outside the map". A zero height still gets extend_top + extend_bottom rows,
+  // as in the released code.
+  if (!(box.x1 > box.x0) || !(box.y1 + opt_.extend_bottom > box.y0 - opt_.extend_top)) {
+    r.problem = "box is empty (zero width, or zero height without extension)";
+    return r;
+  }
   const Box& e = r.window;
   r.u0 = trunc_index(std::min(e.x0, double(W)));
   r.v0 = trunc_index(std::min(e.y0, double(H)));

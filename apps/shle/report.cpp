@@ -60,6 +60,14 @@ std::string summary_json(const shle::SequenceRun& run, const RunDescription& d) 
   kv("layout", json::quote(d.layout));
   kv("calibration", json::quote(d.calibration));
   kv("box_source", json::quote(d.box_source));
+  if (d.box_source == "detector") {
+    std::string labels;
+    for (int l : d.detector.labels) labels += (labels.empty() ? "" : ", ") + std::to_string(l);
+    kv("detector", "{\"model\": " + json::quote(d.detector.model) + ", \"weights\": " +
+                       json::quote(d.detector.weights) + ", \"classes\": " + std::to_string(d.detector.classes) +
+                       ", \"labels\": [" + labels + "], \"score_threshold\": " + jnum(d.detector.score_threshold) +
+                       "}");
+  }
   kv("box_rule", json::quote(d.box_rule));
   kv("tracker", json::quote(d.tracker));
   kv("frames", std::to_string(run.frames.size()));

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "shle/pipeline.h"
 
@@ -12,9 +13,19 @@ namespace shleapp {
 // height comes from; empty fields where a frame has no box or no height, never NaN.
 std::string frames_csv(const shle::SequenceRun& run);
 
+struct DetectorDescription {
+  std::string model, weights;
+  int classes = 0;
+  std::vector<int> labels;
+  double score_threshold = 0;
+};
+
 struct RunDescription {
   std::string sequence, layout, calibration, box_source, box_rule, tracker;
   shle::PipelineOptions options;
+  // Written as "detector" in the summary when box_source is "detector", so a
+  // result says which weights made its boxes.
+  DetectorDescription detector;
 };
 
 std::string summary_json(const shle::SequenceRun& run, const RunDescription& description);

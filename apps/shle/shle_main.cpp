@@ -6,13 +6,16 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "apps/common/cli.h"
 #include "apps/common/image_io.h"
 #include "apps/shle/frame_loader.h"
 #include "apps/shle/height_plot.h"
 #include "apps/shle/report.h"
+#include "nn/threads.h"
 #include "shle/box_source.h"
+#include "shle/detector_box_source.h"
 #include "shle/error.h"
 #include "shle/pipeline.h"
 
@@ -28,11 +31,31 @@ void progress_bar(std::size_t done, std::size_t total) {
   std::fflush(stderr);
 }
 
+// "1,2" -> {1, 2}: positive integers below 100000, nothing else. Empty on error.
+std::vector<int> parse_labels(const std::string& text) {
+  std::vector<int> out;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    std::size_t comma = text.find(',', pos);
+    std::string part = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) return {};
+    const int v = std::stoi(part);
+    if (v < 1) return {};
+    out.push_back(v);
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
   std::string tracker = "ncc", out_dir = "shle_out";
+  std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels;
+  double det_score = 0.3;
+  int threads = 0;
   double gt_height = 0, bf = 0;
   bool filter_single = false, no_kde = false, no_depth = false, no_kalman = false, compat = false, quiet = false;
   shle::PipelineOptions opt;
@@ -48,8 +71,20 @@ int main(int argc, char** argv) {
   p.option("calib-format", "FMT", "plain (default) or smartereye (calibData.json + DepthCalib.json)",
            &calib_format);
   p.option("bf", "M_PX", "override baseline x focal length (metre-pixels)", &bf);
-  p.option("boxes", "SRC", "annotations (LabelMe beside the images, default) or a CSV frame,x0,y0,x1,y1,score",
+  p.option("boxes", "SRC",
+           "annotations (LabelMe beside the images, default), a CSV frame,x0,y0,x1,y1,score, or detector "
+           "(Faster R-CNN on every left image, with --detector-weights)",
            &boxes);
+  p.option("detector-weights", "W", "torchvision Faster R-CNN state_dict as .safetensors (--boxes detector)",
+           &det_weights);
+  p.option("detector-model", "NAME",
+           "fasterrcnn_mobilenet_v3_large_fpn (default), fasterrcnn_mobilenet_v3_large_320_fpn or "
+           "fasterrcnn_resnet50_fpn",
+           &det_model);
+  p.option("detector-score", "S", "detections with score > S are candidates (default 0.3)", &det_score);
+  p.option("detector-labels", "L,..", "labels that are height-limit devices (default: every label but 0)",
+           &det_labels);
+  p.option("threads", "N", "threads for the detector (default: all cores)", &threads);
   p.option("box-rule", "RULE", "paper (default: drop left, low, top-edge boxes, best score) or widest (released)",
            &rule);
   p.option("min-score", "S", "keep candidates with score > S (default 0.3)", &opt.box_rule.min_score);
@@ -81,7 +116,10 @@ int main(int argc, char** argv) {
   p.epilog(
       "example:\n"
       "  shle_synth --out /tmp/scene --device bar --height 3.3\n"
-      "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --gt-height 3.3 --out-dir /tmp/out");
+      "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --gt-height 3.3 --out-dir /tmp/out\n"
+      "  synth --model fasterrcnn_mobilenet_v3_large_320_fpn --out det.safetensors   # untrained\n"
+      "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --boxes detector \\\n"
+      "       --detector-weights det.safetensors --detector-model fasterrcnn_mobilenet_v3_large_320_fpn");
   p.parse(argc, argv);
 
   opt.temporal.use_kalman = !no_kalman;
@@ -103,6 +141,29 @@ int main(int argc, char** argv) {
   if (!(opt.temporal.kalman.q >= 0 && opt.temporal.kalman.r > 0 && opt.temporal.kalman.p0 >= 0) ||
       !std::isfinite(opt.temporal.kalman.q + opt.temporal.kalman.r + opt.temporal.kalman.p0))
     p.fail("Kalman variances must be finite, q >= 0, r > 0, p0 >= 0");
+
+  const bool detector = boxes == "detector";
+  nn::detection::FasterRcnnVariant det_variant{};
+  shle::DetectorOptions det_opt;
+  if (detector) {
+    if (det_weights.empty()) p.fail("--boxes detector needs --detector-weights W.safetensors");
+    if (!nn::detection::parse_faster_rcnn(det_model, &det_variant))
+      p.fail("--detector-model must be fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn "
+             "or fasterrcnn_resnet50_fpn");
+    if (!(det_score >= 0 && det_score < 1)) p.fail("--detector-score must be in [0, 1)");
+    det_opt.score_threshold = det_score;
+    if (p.given("detector-labels")) {
+      det_opt.labels = parse_labels(det_labels);
+      if (det_opt.labels.empty()) p.fail("--detector-labels takes labels >= 1 separated by commas, e.g. 1,2");
+    }
+  } else {
+    for (const char* o : {"detector-weights", "detector-model", "detector-score", "detector-labels"})
+      if (p.given(o)) p.fail(std::string("--") + o + " needs --boxes detector");
+  }
+  if (p.given("threads")) {
+    if (threads < 1 || threads > 1024) p.fail("--threads must be in 1..1024");
+    nn::set_num_threads(threads);
+  }
 
   try {
     opt.box_rule.rule = shle::parse_box_rule(rule);
@@ -127,10 +188,21 @@ int main(int argc, char** argv) {
     }
     shle::Sequence seq = shle::scan_sequence(sequence);
     std::unique_ptr<shle::BoxSource> source;
-    if (boxes == "annotations")
+    shleapp::DetectorDescription det_desc;
+    if (boxes == "annotations") {
       source = std::make_unique<shle::AnnotationBoxSource>();
-    else
+    } else if (detector) {
+      auto d = std::make_unique<shle::DetectorBoxSource>(det_weights, det_variant, det_opt);
+      det_desc = {nn::detection::faster_rcnn_name(det_variant), det_weights, d->num_classes(), d->labels(), det_score};
+      std::string labels;
+      for (int l : d->labels()) labels += (labels.empty() ? "" : ",") + std::to_string(l);
+      std::fprintf(stderr, "shle: detector %s, %d classes (device labels %s, score > %g), weights %s\n",
+                   nn::detection::faster_rcnn_name(det_variant), d->num_classes(), labels.c_str(), det_score,
+                   det_weights.c_str());
+      source = std::move(d);
+    } else {
       source = std::make_unique<shle::BoxesFileSource>(boxes, seq.frames.size());
+    }
 
     std::filesystem::create_directories(out_dir);
     shleapp::PngFrameLoader loader;
@@ -154,7 +226,8 @@ int main(int argc, char** argv) {
     }
 
     std::string csv = shleapp::frames_csv(run);
-    shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt};
+    shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt,
+                                 det_desc};
     std::string summary = shleapp::summary_json(run, desc);
     shleapp::HeightPlotData plot;
     plot.frames = static_cast<int>(run.frames.size());

@@ -13,6 +13,7 @@
 
 #include "apps/common/cli.h"
 #include "nn/models/convnext.h"
+#include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
 #include "nn/models/synthetic_weights.h"
 #include "apps/common/image_io.h"
@@ -20,7 +21,10 @@
 
 namespace {
 
-std::vector<weights::TensorSpec> model_specs(const std::string& model, nn::StixelHeadVariant head) {
+std::vector<weights::TensorSpec> model_specs(const std::string& model, nn::StixelHeadVariant head, int classes) {
+  nn::detection::FasterRcnnVariant detector;
+  if (nn::detection::parse_faster_rcnn(model, &detector))
+    return nn::detection::faster_rcnn_tensor_specs(detector, classes);
   if (model == "stixelnext") {
     auto specs = nn::convnext_tensor_specs(nn::convnext_tiny_config(), "features.");
     for (auto& s : nn::stixel_head_tensor_specs(head, 768, "classifier.")) specs.push_back(s);
@@ -93,13 +97,18 @@ std::vector<std::int64_t> parse_shape(const std::string& text) {
 
 int main(int argc, char** argv) {
   std::string model, shape_text, out, range = "normal", head = "v4", image_size;
-  int seed = 1;
+  int seed = 1, classes = 2;
   cli::Parser args("synth", "(--model NAME | --shape N,C,H,W) --out FILE.safetensors [--seed S] [--range normal|LO,HI]",
                    "Writes seeded random weights for a model (PyTorch state_dict names), a random input\n"
                    "tensor named 'input' (safetensors), or a synthetic road-scene PNG. Untrained: for demos,\n"
                    "tests and benchmarks.");
-  args.option("model", "NAME", "weights for convnext_tiny, convnext_small, convnext_base or stixelnext", &model);
+  args.option("model", "NAME",
+              "weights for convnext_tiny, convnext_small, convnext_base, stixelnext, "
+              "fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn or fasterrcnn_resnet50_fpn",
+              &model);
   args.option("head", "V", "stixelnext head variant v0..v4 (default v4)", &head);
+  args.option("classes", "N", "Faster R-CNN classes, background included (default 2: one device class)",
+              &classes);
   args.option("image", "WxH", "a synthetic road-scene PNG of this size instead", &image_size);
   args.option("shape", "N,C,H,W", "an input tensor 'input' of this shape instead", &shape_text);
   args.option("range", "R", "input values: 'normal' (N(0,1), default) or LO,HI uniform, e.g. 0,255", &range);
@@ -108,6 +117,7 @@ int main(int argc, char** argv) {
   args.required("out");
   args.epilog("examples:\n  synth --model convnext_tiny --out w.safetensors\n"
               "  synth --model stixelnext --head v4 --out stixelnext.safetensors\n"
+              "  synth --model fasterrcnn_mobilenet_v3_large_320_fpn --classes 2 --out det.safetensors\n"
               "  synth --image 1920x1280 --out road.png\n"
               "  synth --shape 1,3,1280,1920 --range 0,255 --out x.safetensors");
   args.parse(argc, argv);
@@ -115,6 +125,10 @@ int main(int argc, char** argv) {
     args.fail("give exactly one of --model, --shape and --image");
   nn::StixelHeadVariant variant;
   if (!nn::parse_stixel_head(head, &variant)) args.fail("--head must be one of v0..v4");
+  nn::detection::FasterRcnnVariant detector;
+  const bool is_detector = nn::detection::parse_faster_rcnn(model, &detector);
+  if (args.given("classes") && !is_detector) args.fail("--classes applies to the fasterrcnn_* models only");
+  if (classes < 1 || classes > 10000) args.fail("--classes must be in 1..10000 (background included)");
 
   try {
     nn::SplitMix64 rng(static_cast<std::uint64_t>(seed));
@@ -128,7 +142,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (!model.empty()) {
-      auto specs = model_specs(model, variant);
+      auto specs = model_specs(model, variant, classes);
       if (specs.empty()) args.fail("unknown model '" + model + "'");
       w = nn::synthetic_weights(specs, static_cast<std::uint64_t>(seed));
       w.set_metadata("model", model);
@@ -137,6 +151,7 @@ int main(int argc, char** argv) {
         w.set_metadata("stixelnext.anchors", "tangent:4,66,64");
         w.set_metadata("stixelnext.normalization", "raw255");
       }
+      if (is_detector) w.set_metadata("classes", std::to_string(classes));
     } else {
       w.set_metadata("format", "roadnn-v1");
       w.set_metadata("generator", "synth seed " + std::to_string(seed) + " (random input)");

@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -113,6 +114,7 @@ TEST(ShleApp, BoxesFileAndOptions) {
   EXPECT_EQ(csv.find("nan"), std::string::npos);
   json::Value s = json::parse(slurp(dir / "o/summary.json"), "s");
   EXPECT_EQ(s.get("box_source")->str(), "boxes-file");
+  EXPECT_EQ(s.get("detector"), nullptr);
   EXPECT_TRUE(s.get("options")->get("kalman_compat")->boolean());
   EXPECT_TRUE(s.get("gt_height")->is_null());
 }
@@ -172,6 +174,116 @@ TEST(ShleApp, SequenceWithoutAnyHeight) {
   EXPECT_TRUE(s.get("scene_height")->is_null());
   EXPECT_TRUE(s.get("he")->is_null());
   EXPECT_TRUE(fs::exists(dir / "o/heights.png"));
+}
+
+
+// Seeded random weights of the fastest detector, written once by `synth`.
+const std::string& detector_weights() {
+  static TempDir dir;
+  static const std::string path = [] {
+    std::string w = dir / "det320.safetensors";
+    std::string cmd = std::string(SYNTH_APP) + " --model fasterrcnn_mobilenet_v3_large_320_fpn --seed 3 --out '" + w +
+                      "' > /dev/null";
+    if (std::system(cmd.c_str()) != 0) throw std::runtime_error("synth failed");
+    return w;
+  }();
+  return path;
+}
+
+std::string detector_cmd(const std::string& weights, const std::string& out_dir) {
+  return std::string(SHLE_APP) + " --sequence '" + sequence() + "' --calib '" + sequence() +
+         "/calib.json' --boxes detector --detector-model fasterrcnn_mobilenet_v3_large_320_fpn --detector-weights '" +
+         weights + "' --out-dir '" + out_dir + "' --quiet";
+}
+
+bool no_outputs(const std::string& out_dir) {
+  return !fs::exists(out_dir + "/frames.csv") && !fs::exists(out_dir + "/summary.json") &&
+         !fs::exists(out_dir + "/heights.png");
+}
+
+TEST(ShleApp, DetectorBoxes) {
+  TempDir dir;
+  const std::string out = dir / "o";
+  // Thresholds 0: untrained weights score anything; most frames should get a box.
+  Result r = run(
+      detector_cmd(detector_weights(), out) + " --detector-score 0 --min-score 0 --box-rule widest --threads 1", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("shle: detector fasterrcnn_mobilenet_v3_large_320_fpn, 2 classes (device labels 1, "
+                       "score > 0), weights " + detector_weights()),
+            std::string::npos)
+      << r.err;
+  std::vector<std::string> lines = split(slurp(out + "/frames.csv"), '\n');
+  ASSERT_EQ(lines.size(), 8u);
+  int detector_frames = 0;
+  for (int i = 1; i <= 6; ++i) {
+    std::vector<std::string> f = split(lines[i], ',');
+    ASSERT_EQ(f.size(), 10u) << lines[i];
+    EXPECT_TRUE(f[2] == "detector" || f[2] == "tracker" || f[2].empty()) << lines[i];
+    detector_frames += f[2] == "detector";
+  }
+  EXPECT_GT(detector_frames, 0) << slurp(out + "/frames.csv");
+  json::Value s = json::parse(slurp(out + "/summary.json"), "s");
+  EXPECT_EQ(s.get("box_source")->str(), "detector");
+  const json::Value* d = s.get("detector");
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->get("model")->str(), "fasterrcnn_mobilenet_v3_large_320_fpn");
+  EXPECT_EQ(d->get("weights")->str(), detector_weights());
+  EXPECT_EQ(d->get("classes")->number(), 2);
+  EXPECT_EQ(d->get("score_threshold")->number(), 0);
+}
+
+TEST(ShleApp, DetectorErrors) {
+  TempDir dir;
+  const std::string app = SHLE_APP, seq = sequence(), out = dir / "o";
+  const std::string base = app + " --sequence '" + seq + "' --calib '" + seq + "/calib.json' --out-dir '" + out + "'";
+  Result r = run(base + " --boxes detector", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--boxes detector needs --detector-weights"), std::string::npos) << r.err;
+  r = run(base + " --detector-weights w.safetensors", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--detector-weights needs --boxes detector"), std::string::npos) << r.err;
+  r = run(base + " --boxes detector --detector-weights w --detector-model fasterrcnn_vgg", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--detector-model must be"), std::string::npos) << r.err;
+  r = run(base + " --boxes detector --detector-weights w --detector-score 1.5", dir);
+  EXPECT_EQ(r.code, 2);
+  r = run(base + " --boxes detector --detector-weights w --detector-labels 1,x", dir);
+  EXPECT_EQ(r.code, 2);
+  r = run(base + " --boxes detector --detector-weights w --threads 0", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(no_outputs(out));
+
+  // Missing and garbage files: one line naming the file, exit 1, no output.
+  const std::string missing = dir / "missing.safetensors";
+  r = run(detector_cmd(missing, out), dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("shle: " + missing + ": ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(no_outputs(out));
+  shletest::write_text(dir / "garbage.safetensors", "this is not a safetensors file at all");
+  r = run(detector_cmd(dir / "garbage.safetensors", out), dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("shle: " + (dir / "garbage.safetensors") + ": ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(no_outputs(out));
+
+  // Weights of another architecture name a tensor.
+  const std::string convnext = dir / "convnext.safetensors";
+  const std::string make_convnext =
+      std::string(SYNTH_APP) + " --model convnext_tiny --out '" + convnext + "' > /dev/null";
+  ASSERT_EQ(std::system(make_convnext.c_str()), 0);
+  r = run(detector_cmd(convnext, out), dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("shle: " + convnext + ": missing tensor 'roi_heads.box_predictor.cls_score.weight'", 0), 0u)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(no_outputs(out));
+
+  // A label the weights do not hold.
+  r = run(detector_cmd(detector_weights(), out) + " --detector-labels 1,2", dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("label 2 asked for, but the weights hold 2 classes"), std::string::npos) << r.err;
+  EXPECT_TRUE(no_outputs(out));
 }
 
 }  // namespace

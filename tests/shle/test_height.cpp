@@ -159,6 +159,29 @@ TEST(Height, NoHeightCases) {
   EXPECT_NE(r.problem.find("height prefilter"), std::string::npos);
 }
 
+// Zero-sized boxes (a boxes CSV accepts x1 == x0, y1 == y0): no crash, a plain
+// reason; a zero height still reads the extension rows as the released code does.
+TEST(Height, ZeroSizedBoxes) {
+  shle::DisparityMap m = blank();
+  fill(m, 0, 64, 0, 20, 2.0f);
+  shle::HeightEstimator est(small_calib(), {});
+  shle::HeightResult r = est.estimate(m, shle::Box{10, 5, 10, 15});
+  EXPECT_FALSE(r.has_height);
+  EXPECT_EQ(r.problem, "box is empty (zero width, or zero height without extension)");
+  r = est.estimate(m, shle::Box{30, 5, 10, 15});  // inverted
+  EXPECT_EQ(r.problem, "box is empty (zero width, or zero height without extension)");
+  r = est.estimate(m, shle::Box{10, 10, 30, 10});  // zero height, 20 + 20 px extension
+  EXPECT_EQ(r.v0, 0);
+  EXPECT_EQ(r.v1, 30);
+  EXPECT_GT(r.valid, 0u);
+  shle::HeightOptions no_ext;
+  no_ext.extend_top = no_ext.extend_bottom = 0;
+  shle::HeightEstimator tight(small_calib(), no_ext);
+  r = tight.estimate(m, shle::Box{10, 10, 30, 10});
+  EXPECT_FALSE(r.has_height);
+  EXPECT_EQ(r.problem, "box is empty (zero width, or zero height without extension)");
+}
+
 TEST(Height, InvalidDisparitiesAreSkipped) {
   shle::DisparityMap m = blank();
   fill(m, 10, 30, 5, 8, 1.0f);

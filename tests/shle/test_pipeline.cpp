@@ -197,6 +197,43 @@ TEST(Pipeline, BoxesFileWithBoxOutsideAndWidestRule) {
   EXPECT_EQ(run.frames[0].box.x0, 10);  // the wide low box
 }
 
+// A boxes CSV accepts x1 == x0 and y1 == y0 (only x1 < x0 is malformed): such a
+// box reaches the tracker and stage 2, which must report it, not crash.
+TEST(Pipeline, ZeroSizedBoxesFromCsv) {
+  Fixture f;
+  std::string csv = "frame,x0,y0,x1,y1,score\n";
+  for (int k = 0; k < 8; ++k) {
+    const shle::Box& b = f.truth[k].box;
+    char line[200];
+    if (k == 2 || k == 5)  // zero width
+      std::snprintf(line, sizeof line, "%d,%.2f,%.2f,%.2f,%.2f,0.9\n", k, b.x0, b.y0, b.x0, b.y1);
+    else if (k == 3)  // zero height: the extension still gives rows
+      std::snprintf(line, sizeof line, "%d,%.2f,%.2f,%.2f,%.2f,0.9\n", k, b.x0, b.y0, b.x1, b.y0);
+    else
+      std::snprintf(line, sizeof line, "%d,%.2f,%.2f,%.2f,%.2f,0.9\n", k, b.x0, b.y0, b.x1, b.y1);
+    csv += line;
+  }
+  shletest::write_text(f.dir / "boxes.csv", csv);
+  shle::Sequence s = shle::scan_sequence(f.seq);
+  shleapp::PngFrameLoader loader;
+  shle::BoxesFileSource src(f.dir / "boxes.csv", s.frames.size());
+  for (const char* tracker : {"ncc", "mil"}) {
+    shle::PipelineOptions opt;
+    opt.box_rule.rule = shle::BoxRule::Widest;  // keeps every lone box
+    opt.tracker = tracker;
+    shle::SequenceRun run = shle::run_sequence(s, f.cal, src, loader, opt);
+    for (int k : {2, 5}) {
+      EXPECT_TRUE(run.frames[k].has_box) << tracker;
+      EXPECT_FALSE(run.frames[k].stage2.has_height) << tracker;
+      EXPECT_TRUE(has_problem(run.frames[k], "box is empty")) << tracker;
+    }
+    EXPECT_TRUE(run.frames[3].has_box);
+    EXPECT_GT(run.frames[3].stage2.window.height(), 0);
+    EXPECT_TRUE(run.heights.has_scene_height);
+    EXPECT_TRUE(std::isfinite(run.heights.scene_height));
+  }
+}
+
 TEST(Pipeline, ImageDisparitySizeMismatch) {
   Fixture f(shleapp::SynthLayout::PlainPfm);
   shle::Sequence s = shle::scan_sequence(f.seq);
