@@ -1,6 +1,8 @@
 // Bad inputs to the detector: clear errors, never a crash.
 #include <gtest/gtest.h>
 
+#include "tests/error_of.h"
+
 #include "nn/error.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/detection/transform.h"
@@ -10,14 +12,7 @@ namespace {
 
 namespace det = nn::detection;
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+using testutil::error_of;
 
 // Rewrites a weights file with one tensor renamed, dropped or added.
 weights::SafeTensors edited(const weights::SafeTensors& st, const std::string& drop, const std::string& add) {

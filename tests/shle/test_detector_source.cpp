@@ -3,6 +3,8 @@
 // seeded random weights against FasterRcnn::forward itself, and its errors.
 #include <gtest/gtest.h>
 
+#include "tests/error_of.h"
+
 #include <cmath>
 #include <functional>
 
@@ -16,14 +18,7 @@ namespace {
 namespace det = nn::detection;
 constexpr det::FasterRcnnVariant kFast = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+using testutil::error_of;
 
 // Seeded random weights with 3 classes (about 20 M values), made once.
 const weights::SafeTensors& random_weights() {

@@ -2,6 +2,8 @@
 // naming the path.
 #include <gtest/gtest.h>
 
+#include "tests/error_of.h"
+
 #include <algorithm>
 #include <csignal>
 #include <filesystem>
@@ -20,6 +22,8 @@
 namespace fs = std::filesystem;
 
 namespace {
+
+using testutil::error_of;
 
 // A fresh directory per test (ctest runs test cases in parallel processes).
 class Files : public ::testing::Test {
@@ -43,14 +47,6 @@ class Files : public ::testing::Test {
     std::ofstream(p, std::ios::binary) << text;
   }
 
-  std::string error_of(const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const std::exception& e) {
-      return e.what();
-    }
-    return "";
-  }
 
   fs::path dir_;
 };
