@@ -40,6 +40,39 @@ bool use_fused_mlp(std::size_t m, int threads) {
   return (m + kMlpTile - 1) / kMlpTile >= static_cast<std::size_t>(4 * threads);
 }
 
+// Folds y = W (gamma * z + beta) + b, z the normalised input, into y = W' z + b':
+// W'[o][i] = W[o][i] * gamma[i / group], b'[o] = b[o] + sum_i W[o][i] beta[i / group],
+// for W [n x k] whose input index i covers `group` consecutive elements per channel
+// (1 for a Linear layer, kh * kw for a conv's [cout, cin, kh, kw]). In double.
+void fold_affine_in(std::vector<float>& w, std::vector<float>& b, int n, int k, int group,
+                    const std::vector<float>& gamma, const std::vector<float>& beta) {
+  for (int o = 0; o < n; ++o) {
+    float* wo = w.data() + static_cast<std::size_t>(o) * k;
+    double acc = b[o];
+    for (int i = 0; i < k; ++i) {
+      acc += static_cast<double>(wo[i]) * beta[i / group];
+      wo[i] = static_cast<float>(static_cast<double>(wo[i]) * gamma[i / group]);
+    }
+    b[o] = static_cast<float>(acc);
+  }
+}
+
+// Folds a per-output scale s into y = s * (W x + b): W'[o][i] = s[o] W[o][i], b' = s * b.
+void fold_scale_out(std::vector<float>& w, std::vector<float>& b, int n, int k,
+                    const std::vector<float>& s) {
+  for (int o = 0; o < n; ++o) {
+    float* wo = w.data() + static_cast<std::size_t>(o) * k;
+    for (int i = 0; i < k; ++i) wo[i] = static_cast<float>(static_cast<double>(wo[i]) * s[o]);
+    b[o] = static_cast<float>(static_cast<double>(b[o]) * s[o]);
+  }
+}
+
+AlignedBuffer to_buffer(const std::vector<float>& v) {
+  AlignedBuffer b(v.size());
+  std::copy(v.begin(), v.end(), b.data());
+  return b;
+}
+
 }  // namespace
 
 std::string ConvNeXtConfig::describe() const {
@@ -134,17 +167,17 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
     if (s > 0) {
       const std::string d = prefix + std::to_string(2 * s) + ".";
       stage.has_down = true;
-      stage.down_gamma = load_vec(st, d + "0.weight");
-      stage.down_beta = load_vec(st, d + "0.bias");
       Conv2dParams p;
       p.cin = cfg_.dims[s - 1];
       p.cout = c;
       p.kh = p.kw = p.stride_h = p.stride_w = 2;
       auto w = st.f32(d + "1.weight");
       auto b = st.f32(d + "1.bias");
+      // Unpadded 2x2/2: every tap reads a normalised pixel, so beta folds exactly.
+      fold_affine_in(w, b, c, p.cin * 4, 4, st.f32(d + "0.weight"), st.f32(d + "0.bias"));
       stage.down = Conv2dWeights::pack(w.data(), b.data(), p);
       weight_bytes_ += stage.down.gemm().bytes();
-      count(2 * p.cin + c);
+      count(c);  // bias (LayerNorm folded into the weights)
     }
     for (int i = 0; i < cfg_.depths[s]; ++i) {
       const std::string b = prefix + std::to_string(2 * s + 1) + "." + std::to_string(i) + ".";
@@ -153,17 +186,18 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
       auto dw = st.f32(b + "block.0.weight");
       auto dwb = st.f32(b + "block.0.bias");
       blk.dw = DwConvWeights::pack(dw.data(), dwb.data(), c, dp);
-      blk.ln_gamma = load_vec(st, b + "block.2.weight");
-      blk.ln_beta = load_vec(st, b + "block.2.bias");
       auto w1 = st.f32(b + "block.3.weight");
+      auto b1 = st.f32(b + "block.3.bias");
+      fold_affine_in(w1, b1, 4 * c, c, 1, st.f32(b + "block.2.weight"), st.f32(b + "block.2.bias"));
       blk.pw1 = GemmWeights::pack(w1.data(), 4 * c, c);
-      blk.b1 = load_vec(st, b + "block.3.bias");
+      blk.b1 = to_buffer(b1);
       auto w2 = st.f32(b + "block.5.weight");
+      auto b2 = st.f32(b + "block.5.bias");
+      fold_scale_out(w2, b2, c, 4 * c, st.f32(b + "layer_scale"));
       blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
-      blk.b2 = load_vec(st, b + "block.5.bias");
-      blk.layer_scale = load_vec(st, b + "layer_scale");
+      blk.b2 = to_buffer(b2);
       weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
-      count(49 * c + c + 2 * c + 4 * c + c + c);
+      count(49 * c + c + 4 * c + c);  // dw, dw bias, b1, b2
       stage.blocks.push_back(std::move(blk));
     }
     stages_.push_back(std::move(stage));
@@ -246,14 +280,13 @@ void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m
   float* x = act_a_.data() + m0 * c;
   const float* t = act_b_.data() + m0 * c;
   const int rows = static_cast<int>(m1 - m0);
-  layernorm(rows, c, t, c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  layernorm(rows, c, t, c, ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
   gemm(rows, ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
-  e2.scale = b.layer_scale.data();
   e2.residual = x;
   e2.ldr = c;
   gemm(rows, hid, 4 * c, b.pw2, x, c, e2);
@@ -282,14 +315,13 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
   }
   float* ln = scratch_.data();
   float* hid = ln + m * c;
-  layernorm_parallel(m, c, act_b_.data(), c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  layernorm_parallel(m, c, act_b_.data(), c, ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
   gemm_parallel(static_cast<int>(m), ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
-  e2.scale = b.layer_scale.data();
   e2.residual = act_a_.data();
   e2.ldr = c;
   gemm_parallel(static_cast<int>(m), hid, 4 * c, b.pw2, act_a_.data(), c, e2);
@@ -312,8 +344,7 @@ ConstTensorView ConvNeXt::forward(const float* input_nchw) {
       const Shape prev = s;
       s = stage_shapes_[si];
       layernorm_parallel(static_cast<std::size_t>(prev.n) * prev.h * prev.w, prev.c, act_a_.data(),
-                         prev.c, act_a_.data(), prev.c, st.down_gamma.data(), st.down_beta.data(),
-                         cfg_.eps);
+                         prev.c, act_a_.data(), prev.c, nullptr, nullptr, cfg_.eps);
       conv2d(ConstTensorView(act_a_.data(), prev), st.down, TensorView{act_b_.data(), s},
              scratch_.data());
       std::swap(act_a_, act_b_);

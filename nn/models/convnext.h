@@ -68,17 +68,19 @@ class ConvNeXt {
   double flops() const;  // multiply-adds x 2 of one forward at the planned size
 
  private:
+  // LayerNorm's gamma/beta are folded into pw1 and the layer scale into pw2 at load
+  // (in double): the MLP normalises without an affine step and pw2's epilogue is
+  // bias + residual. The downsampling LayerNorm's gamma/beta go into the 2x2 conv.
   struct Block {
     DwConvWeights dw;
-    AlignedBuffer ln_gamma, ln_beta, b1, b2, layer_scale;
+    AlignedBuffer b1, b2;
     GemmWeights pw1, pw2;
     int prof_dw = -1, prof_mlp = -1;
   };
   struct Stage {
     int dim = 0;
     bool has_down = false;  // downsampling layer before this stage (all but the first)
-    AlignedBuffer down_gamma, down_beta;
-    Conv2dWeights down;
+    Conv2dWeights down;     // LayerNorm gamma/beta folded in
     std::vector<Block> blocks;
     int prof_down = -1;
   };
