@@ -83,15 +83,21 @@ class ConvNeXt {
     Conv2dWeights down;     // LayerNorm gamma/beta folded in
     std::vector<Block> blocks;
     int prof_down = -1;
+    int down_chunk = 1;       // output rows per LayerNorm + im2col + GEMM step
+    bool down_whole = false;  // small: one im2col, then a GEMM split over columns
   };
 
   void run_stem(const float* input_nchw, Shape s);
+  void run_down(const Stage& st, Shape prev, Shape s);
   void run_block(const Block& b, Shape s);
   void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln, float* hid);
 
   ConvNeXtConfig cfg_;
-  Conv2dWeights stem_;
-  AlignedBuffer stem_gamma_, stem_beta_;
+  // The stem's GEMM reads patches straight from the NCHW input, so its K order is
+  // PyTorch's (c, ky, kx) and W packs without reordering.
+  GemmWeights stem_w_;
+  AlignedBuffer stem_b_, stem_gamma_, stem_beta_;
+  int stem_chunk_ = 1;  // output rows per im2col + GEMM + LayerNorm step
   std::vector<Stage> stages_;
   std::size_t weight_bytes_ = 0;
 
