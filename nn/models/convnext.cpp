@@ -382,7 +382,7 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
     // leave one thread a tile more: 7 against 6 at 28x28) and runs it in tiles of
     // kMlpTile rows. A row's result does not depend on its tile.
 #ifdef ROADNN_OPENMP
-#pragma omp parallel num_threads(planned_threads_)
+#pragma omp parallel
 #endif
     {
       int id = 0, team = 1;
