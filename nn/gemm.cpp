@@ -181,7 +181,13 @@ void gemm_block(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t l
                 const GemmWeights& w, float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep) {
   const GemmUkernelInfo& info = gemm_ukernel(w.ukernel());
   const int mr = info.mr, nr = info.nr, n = w.n(), k = w.k();
-  const int mc = std::max(mr, kMc / mr * mr);
+  // A block of at most a few hundred rows (a thread's share of a small-M GEMM split by
+  // columns) is one row block when its partial sums fit the scratch tile: W then streams
+  // from L3 once instead of once per kMc rows. Blocking never changes the K order.
+  const int rows_up = (m1 - m0 + mr - 1) / mr * mr;
+  const int mc = rows_up <= 4 * kMc && rows_up * nr <= kPartialFloats
+                     ? rows_up
+                     : std::max(mr, kMc / mr * mr);
   const int kblocks = (k + kKcMax - 1) / kKcMax;
   const int kc = (k + kblocks - 1) / kblocks;  // equal blocks, the last one shorter
   // Panels per chunk: all of them without K blocking, else as many as the scratch holds
@@ -283,8 +289,11 @@ void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights&
     const int row_tiles = (m + mr - 1) / mr;
     // Rows alone when every thread gets a few row blocks; otherwise a grid that also
     // splits the panels. Either way each element is computed once, by the same kernel.
+    // Columns when each thread's row share is small (ConvNeXt stages 3-4 at 224x224) and
+    // there are enough panels to balance: each thread then streams only its part of W.
     int tn = 1;
-    if (m < 64 * threads) tn = std::min(threads, panels);
+    if (m < 64 * threads || (m < 128 * threads && panels >= 4 * threads))
+      tn = std::min(threads, panels);
     const int tm = std::max(1, std::min(threads / tn, row_tiles));
 #pragma omp parallel num_threads(tm * tn)
     {

@@ -9,6 +9,10 @@
 #include "nn/layout.h"
 #include "nn/threads.h"
 
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
 namespace nn {
 
 namespace {
@@ -38,6 +42,39 @@ AlignedBuffer load_vec(const weights::SafeTensors& st, const std::string& name) 
 // instead. Both compute every element identically (same kernels, same K order).
 bool use_fused_mlp(std::size_t m, int threads) {
   return (m + kMlpTile - 1) / kMlpTile >= static_cast<std::size_t>(4 * threads);
+}
+
+// Folds y = W (gamma * z + beta) + b, z the normalised input, into y = W' z + b':
+// W'[o][i] = W[o][i] * gamma[i / group], b'[o] = b[o] + sum_i W[o][i] beta[i / group],
+// for W [n x k] whose input index i covers `group` consecutive elements per channel
+// (1 for a Linear layer, kh * kw for a conv's [cout, cin, kh, kw]). In double.
+void fold_affine_in(std::vector<float>& w, std::vector<float>& b, int n, int k, int group,
+                    const std::vector<float>& gamma, const std::vector<float>& beta) {
+  for (int o = 0; o < n; ++o) {
+    float* wo = w.data() + static_cast<std::size_t>(o) * k;
+    double acc = b[o];
+    for (int i = 0; i < k; ++i) {
+      acc += static_cast<double>(wo[i]) * beta[i / group];
+      wo[i] = static_cast<float>(static_cast<double>(wo[i]) * gamma[i / group]);
+    }
+    b[o] = static_cast<float>(acc);
+  }
+}
+
+// Folds a per-output scale s into y = s * (W x + b): W'[o][i] = s[o] W[o][i], b' = s * b.
+void fold_scale_out(std::vector<float>& w, std::vector<float>& b, int n, int k,
+                    const std::vector<float>& s) {
+  for (int o = 0; o < n; ++o) {
+    float* wo = w.data() + static_cast<std::size_t>(o) * k;
+    for (int i = 0; i < k; ++i) wo[i] = static_cast<float>(static_cast<double>(wo[i]) * s[o]);
+    b[o] = static_cast<float>(static_cast<double>(b[o]) * s[o]);
+  }
+}
+
+AlignedBuffer to_buffer(const std::vector<float>& v) {
+  AlignedBuffer b(v.size());
+  std::copy(v.begin(), v.end(), b.data());
+  return b;
 }
 
 }  // namespace
@@ -113,15 +150,12 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
   weights::check_tensors(st, convnext_tensor_specs(cfg_, prefix));
   auto count = [this](std::size_t floats) { weight_bytes_ += floats * sizeof(float); };
 
-  Conv2dParams stem;
-  stem.cin = 3;
-  stem.cout = cfg_.dims[0];
-  stem.kh = stem.kw = stem.stride_h = stem.stride_w = 4;
   {
-    auto w = st.f32(prefix + "0.0.weight");
-    auto b = st.f32(prefix + "0.0.bias");
-    stem_ = Conv2dWeights::pack(w.data(), b.data(), stem);
-    weight_bytes_ += stem_.gemm().bytes();
+    auto w = st.f32(prefix + "0.0.weight");  // [c0, 3, 4, 4] = [c0 x 48], K order (c, ky, kx)
+    stem_w_ = GemmWeights::pack(w.data(), cfg_.dims[0], 48);
+    stem_b_ = load_vec(st, prefix + "0.0.bias");
+    weight_bytes_ += stem_w_.bytes();
+    count(cfg_.dims[0]);
   }
   stem_gamma_ = load_vec(st, prefix + "0.1.weight");
   stem_beta_ = load_vec(st, prefix + "0.1.bias");
@@ -134,17 +168,17 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
     if (s > 0) {
       const std::string d = prefix + std::to_string(2 * s) + ".";
       stage.has_down = true;
-      stage.down_gamma = load_vec(st, d + "0.weight");
-      stage.down_beta = load_vec(st, d + "0.bias");
       Conv2dParams p;
       p.cin = cfg_.dims[s - 1];
       p.cout = c;
       p.kh = p.kw = p.stride_h = p.stride_w = 2;
       auto w = st.f32(d + "1.weight");
       auto b = st.f32(d + "1.bias");
+      // Unpadded 2x2/2: every tap reads a normalised pixel, so beta folds exactly.
+      fold_affine_in(w, b, c, p.cin * 4, 4, st.f32(d + "0.weight"), st.f32(d + "0.bias"));
       stage.down = Conv2dWeights::pack(w.data(), b.data(), p);
       weight_bytes_ += stage.down.gemm().bytes();
-      count(2 * p.cin + c);
+      count(c);  // bias (LayerNorm folded into the weights)
     }
     for (int i = 0; i < cfg_.depths[s]; ++i) {
       const std::string b = prefix + std::to_string(2 * s + 1) + "." + std::to_string(i) + ".";
@@ -153,17 +187,18 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
       auto dw = st.f32(b + "block.0.weight");
       auto dwb = st.f32(b + "block.0.bias");
       blk.dw = DwConvWeights::pack(dw.data(), dwb.data(), c, dp);
-      blk.ln_gamma = load_vec(st, b + "block.2.weight");
-      blk.ln_beta = load_vec(st, b + "block.2.bias");
       auto w1 = st.f32(b + "block.3.weight");
+      auto b1 = st.f32(b + "block.3.bias");
+      fold_affine_in(w1, b1, 4 * c, c, 1, st.f32(b + "block.2.weight"), st.f32(b + "block.2.bias"));
       blk.pw1 = GemmWeights::pack(w1.data(), 4 * c, c);
-      blk.b1 = load_vec(st, b + "block.3.bias");
+      blk.b1 = to_buffer(b1);
       auto w2 = st.f32(b + "block.5.weight");
+      auto b2 = st.f32(b + "block.5.bias");
+      fold_scale_out(w2, b2, c, 4 * c, st.f32(b + "layer_scale"));
       blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
-      blk.b2 = load_vec(st, b + "block.5.bias");
-      blk.layer_scale = load_vec(st, b + "layer_scale");
+      blk.b2 = to_buffer(b2);
       weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
-      count(49 * c + c + 2 * c + 4 * c + c + c);
+      count(49 * c + c + 4 * c + c);  // dw, dw bias, b1, b2
       stage.blocks.push_back(std::move(blk));
     }
     stages_.push_back(std::move(stage));
@@ -180,10 +215,11 @@ void ConvNeXt::plan(int n, int h, int w) {
   stage_shapes_.clear();
   prof_.clear();
 
-  Conv2dParams sp = stem_.params();
-  Shape s = conv2d_output_shape(in_shape_, sp);
-  std::size_t act = std::max(in_shape_.count(), s.count());
-  conv_scratch_ = conv2d_scratch_floats(sp, s.w);
+  Shape s{n, h / 4, w / 4, cfg_.dims[0]};
+  std::size_t act = s.count();
+  // Chunks of output rows with at least kMlpTile pixels feed the GEMMs enough rows.
+  stem_chunk_ = std::min(s.h, (kMlpTile + s.w - 1) / s.w);
+  conv_scratch_ = static_cast<std::size_t>(stem_chunk_) * s.w * 48;
   std::size_t mlp_scratch = 0;  // per thread for fused stages; whole for unfused
   std::size_t shared_scratch = 0;
   prof_stem_ = prof_.add("features.0", "conv 4x4/4 + LayerNorm", nchw(s),
@@ -193,7 +229,14 @@ void ConvNeXt::plan(int n, int h, int w) {
     if (st.has_down) {
       Shape d = conv2d_output_shape(s, st.down.params());
       if (d.h < 1 || d.w < 1) throw Error("convnext: input too small for the downsampling layers");
-      conv_scratch_ = std::max(conv_scratch_, conv2d_scratch_floats(st.down.params(), d.w));
+      const std::size_t dm = static_cast<std::size_t>(d.n) * d.h * d.w;
+      const std::size_t patch = 4 * static_cast<std::size_t>(s.c);
+      st.down_whole = dm < static_cast<std::size_t>(128 * planned_threads_) && planned_threads_ > 1;
+      st.down_chunk = std::min(d.h, (kMlpTile + d.w - 1) / d.w);
+      if (st.down_whole)
+        shared_scratch = std::max(shared_scratch, dm * patch);
+      else
+        conv_scratch_ = std::max(conv_scratch_, st.down_chunk * d.w * patch);
       st.prof_down = prof_.add("features." + std::to_string(2 * si), "LayerNorm + conv 2x2/2",
                                nchw(d), 2.0 * d.count() * 4 * s.c);
       s = d;
@@ -231,14 +274,82 @@ double ConvNeXt::flops() const {
   return f;
 }
 
+// Stem: per chunk of output rows, the 4x4 patches straight from the NCHW input
+// (K order c, ky, kx), the GEMM with bias, then LayerNorm on the rows while in cache.
 void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
   Profiler::Scope t(&prof_, prof_stem_);
-  // The stem reads NHWC; act_b_ is free until the first block.
-  nchw_to_nhwc(input_nchw, in_shape_.n, 3, in_shape_.h, in_shape_.w, act_b_.data());
-  TensorView out{act_a_.data(), s};
-  conv2d(ConstTensorView(act_b_.data(), in_shape_), stem_, out, scratch_.data());
-  layernorm_parallel(out.pixels(), s.c, out.data, s.c, out.data, s.c, stem_gamma_.data(),
-                     stem_beta_.data(), cfg_.eps);
+  const int ih = in_shape_.h, iw = in_shape_.w, ow = s.w, c0 = s.c;
+  const std::size_t plane = static_cast<std::size_t>(ih) * iw;
+  const int per_image = (s.h + stem_chunk_ - 1) / stem_chunk_;
+  const int chunks = s.n * per_image;
+  GemmEpilogue ep;
+  ep.bias = stem_b_.data();
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+  for (int ci = 0; ci < chunks; ++ci) {
+    float* col = scratch_.data() + scratch_per_thread_ * thread_index();
+    const int n = ci / per_image, y0 = ci % per_image * stem_chunk_;
+    const int y1 = std::min(s.h, y0 + stem_chunk_);
+    const float* img = input_nchw + static_cast<std::size_t>(n) * 3 * plane;
+    float* p = col;
+    for (int oy = y0; oy < y1; ++oy)
+      for (int ox = 0; ox < ow; ++ox)
+        for (int c = 0; c < 3; ++c)
+          for (int ky = 0; ky < 4; ++ky, p += 4)
+            std::memcpy(p, img + c * plane + static_cast<std::size_t>(4 * oy + ky) * iw + 4 * ox,
+                        4 * sizeof(float));
+    const int rows = (y1 - y0) * ow;
+    float* out = act_a_.data() + ((static_cast<std::size_t>(n) * s.h + y0) * ow) * c0;
+    gemm(rows, col, 48, stem_w_, out, c0, ep);
+    layernorm(rows, c0, out, c0, out, c0, stem_gamma_.data(), stem_beta_.data(), cfg_.eps);
+  }
+}
+
+// Downsampling: LayerNorm (gamma/beta folded into the conv) written straight into the
+// 2x2/2 im2col rows (K order ky, kx, c; each input pixel is normalised once), then the
+// GEMM. Large maps go in chunks of output rows per thread; small ones are one im2col
+// and a GEMM split over columns (at 224x224 the 7x7 map was 7 GEMMs of 7 rows, each
+// streaming all of W).
+void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
+  Profiler::Scope t(&prof_, st.prof_down);
+  const int cin = prev.c, ow = s.w;
+  const std::ptrdiff_t patch = 4 * static_cast<std::ptrdiff_t>(cin);
+  const float* x = act_a_.data();
+  auto im2col = [&](int n, int oy, float* dst) {
+    for (int ky = 0; ky < 2; ++ky) {
+      const float* src = x + ((static_cast<std::size_t>(n) * prev.h + 2 * oy + ky) * prev.w) * cin;
+      float* d = dst + ky * 2 * cin;
+      layernorm(ow, cin, src, 2 * cin, d, patch, nullptr, nullptr, cfg_.eps);
+      layernorm(ow, cin, src + cin, 2 * cin, d + cin, patch, nullptr, nullptr, cfg_.eps);
+    }
+  };
+  GemmEpilogue ep;
+  ep.bias = st.down.bias();
+  if (st.down_whole) {
+    const int rows = s.n * s.h;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+    for (int r = 0; r < rows; ++r)
+      im2col(r / s.h, r % s.h, scratch_.data() + static_cast<std::size_t>(r) * ow * patch);
+    gemm_parallel(rows * ow, scratch_.data(), patch, st.down.gemm(), act_b_.data(), s.c, ep);
+    return;
+  }
+  const int per_image = (s.h + st.down_chunk - 1) / st.down_chunk;
+  const int chunks = s.n * per_image;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+  for (int ci = 0; ci < chunks; ++ci) {
+    float* col = scratch_.data() + scratch_per_thread_ * thread_index();
+    const int n = ci / per_image, y0 = ci % per_image * st.down_chunk;
+    const int y1 = std::min(s.h, y0 + st.down_chunk);
+    for (int oy = y0; oy < y1; ++oy)
+      im2col(n, oy, col + static_cast<std::size_t>(oy - y0) * ow * patch);
+    float* out = act_b_.data() + ((static_cast<std::size_t>(n) * s.h + y0) * ow) * s.c;
+    gemm((y1 - y0) * ow, col, patch, st.down.gemm(), out, s.c, ep);
+  }
 }
 
 void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln,
@@ -246,14 +357,13 @@ void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m
   float* x = act_a_.data() + m0 * c;
   const float* t = act_b_.data() + m0 * c;
   const int rows = static_cast<int>(m1 - m0);
-  layernorm(rows, c, t, c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  layernorm(rows, c, t, c, ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
   gemm(rows, ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
-  e2.scale = b.layer_scale.data();
   e2.residual = x;
   e2.ldr = c;
   gemm(rows, hid, 4 * c, b.pw2, x, c, e2);
@@ -268,28 +378,37 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
   Profiler::Scope t(&prof_, b.prof_mlp);
   const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
   if (use_fused_mlp(m, planned_threads_)) {
-    const long tiles = static_cast<long>((m + kMlpTile - 1) / kMlpTile);
+    // Each thread takes an equal contiguous share of 8-row groups (whole tiles would
+    // leave one thread a tile more: 7 against 6 at 28x28) and runs it in tiles of
+    // kMlpTile rows. A row's result does not depend on its tile.
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel
 #endif
-    for (long i = 0; i < tiles; ++i) {
-      float* ln = scratch_.data() + scratch_per_thread_ * thread_index();
+    {
+      int id = 0, team = 1;
+#ifdef ROADNN_OPENMP
+      id = omp_get_thread_num();
+      team = omp_get_num_threads();
+#endif
+      const std::size_t groups = (m + 7) / 8;
+      const std::size_t r0 = std::min(m, groups * id / team * 8);
+      const std::size_t r1 = std::min(m, groups * (id + 1) / team * 8);
+      float* ln = scratch_.data() + scratch_per_thread_ * id;
       float* hid = ln + static_cast<std::size_t>(kMlpTile) * c;
-      const std::size_t m0 = static_cast<std::size_t>(i) * kMlpTile;
-      run_mlp_rows(b, c, m0, std::min(m, m0 + kMlpTile), ln, hid);
+      for (std::size_t m0 = r0; m0 < r1; m0 += kMlpTile)
+        run_mlp_rows(b, c, m0, std::min(r1, m0 + kMlpTile), ln, hid);
     }
     return;
   }
   float* ln = scratch_.data();
   float* hid = ln + m * c;
-  layernorm_parallel(m, c, act_b_.data(), c, ln, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  layernorm_parallel(m, c, act_b_.data(), c, ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
   gemm_parallel(static_cast<int>(m), ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
-  e2.scale = b.layer_scale.data();
   e2.residual = act_a_.data();
   e2.ldr = c;
   gemm_parallel(static_cast<int>(m), hid, 4 * c, b.pw2, act_a_.data(), c, e2);
@@ -308,14 +427,9 @@ ConstTensorView ConvNeXt::forward(const float* input_nchw) {
   for (std::size_t si = 0; si < stages_.size(); ++si) {
     const Stage& st = stages_[si];
     if (st.has_down) {
-      Profiler::Scope t(&prof_, st.prof_down);
       const Shape prev = s;
       s = stage_shapes_[si];
-      layernorm_parallel(static_cast<std::size_t>(prev.n) * prev.h * prev.w, prev.c, act_a_.data(),
-                         prev.c, act_a_.data(), prev.c, st.down_gamma.data(), st.down_beta.data(),
-                         cfg_.eps);
-      conv2d(ConstTensorView(act_a_.data(), prev), st.down, TensorView{act_b_.data(), s},
-             scratch_.data());
+      run_down(st, prev, s);
       std::swap(act_a_, act_b_);
     }
     for (const Block& b : st.blocks) run_block(b, s);

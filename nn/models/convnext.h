@@ -68,28 +68,36 @@ class ConvNeXt {
   double flops() const;  // multiply-adds x 2 of one forward at the planned size
 
  private:
+  // LayerNorm's gamma/beta are folded into pw1 and the layer scale into pw2 at load
+  // (in double): the MLP normalises without an affine step and pw2's epilogue is
+  // bias + residual. The downsampling LayerNorm's gamma/beta go into the 2x2 conv.
   struct Block {
     DwConvWeights dw;
-    AlignedBuffer ln_gamma, ln_beta, b1, b2, layer_scale;
+    AlignedBuffer b1, b2;
     GemmWeights pw1, pw2;
     int prof_dw = -1, prof_mlp = -1;
   };
   struct Stage {
     int dim = 0;
     bool has_down = false;  // downsampling layer before this stage (all but the first)
-    AlignedBuffer down_gamma, down_beta;
-    Conv2dWeights down;
+    Conv2dWeights down;     // LayerNorm gamma/beta folded in
     std::vector<Block> blocks;
     int prof_down = -1;
+    int down_chunk = 1;       // output rows per LayerNorm + im2col + GEMM step
+    bool down_whole = false;  // small: one im2col, then a GEMM split over columns
   };
 
   void run_stem(const float* input_nchw, Shape s);
+  void run_down(const Stage& st, Shape prev, Shape s);
   void run_block(const Block& b, Shape s);
   void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln, float* hid);
 
   ConvNeXtConfig cfg_;
-  Conv2dWeights stem_;
-  AlignedBuffer stem_gamma_, stem_beta_;
+  // The stem's GEMM reads patches straight from the NCHW input, so its K order is
+  // PyTorch's (c, ky, kx) and W packs without reordering.
+  GemmWeights stem_w_;
+  AlignedBuffer stem_b_, stem_gamma_, stem_beta_;
+  int stem_chunk_ = 1;  // output rows per im2col + GEMM + LayerNorm step
   std::vector<Stage> stages_;
   std::size_t weight_bytes_ = 0;
 

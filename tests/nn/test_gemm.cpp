@@ -268,8 +268,10 @@ void expect_same_bits(const std::vector<float>& x, const std::vector<float>& y, 
 // FMA sequence and epilogue whichever tile (full or tail) computes it.
 TEST_P(GemmUkernelTest, BitwiseIdenticalForAnySplit) {
   // Large M (row split), several row blocks with K blocks, small M (rows and panels
-  // split), long K.
-  const DeterminismCase cases[] = {{203, 100, 96}, {150, 70, 700}, {50, 200, 1100}, {7, 130, 3100}};
+  // split), long K, and M a little above the 64-row threshold with many panels (columns
+  // split; one tall row block per thread).
+  const DeterminismCase cases[] = {{203, 100, 96}, {150, 70, 700}, {50, 200, 1100}, {7, 130, 3100},
+                                   {200, 400, 1100}};
   for (const auto& dc : cases) {
     SCOPED_TRACE("m " + std::to_string(dc.m) + " n " + std::to_string(dc.n) + " k " +
                  std::to_string(dc.k));
