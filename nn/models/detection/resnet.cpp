@@ -64,47 +64,64 @@ ResNet50Backbone::ResNet50Backbone(const weights::SafeTensors& st, const std::st
 
 void ResNet50Backbone::plan(int h, int w) {
   scratch_ = ConvScratch();
-  Shape s = conv2d_output_shape({1, h, w, 3}, stem_.params());
+  std::size_t a_max = 0, b_max = 0, id_max = 0, pp_max = 0;
+  auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
+  Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   scratch_.require(stem_.params(), s.w);
-  stem_out_.resize(s);
+  grow(pp_max, s);
   s = max_pool2d_output_shape(s, MaxPoolParams{});
   pooled_.resize(s);
-  for (auto& layer : layers_)
-    for (Bottleneck& b : layer) {
-      const Shape a = conv2d_output_shape(s, b.conv1.params());
-      b.a.resize(a);
-      const Shape c2 = conv2d_output_shape(a, b.conv2.params());
-      b.b.resize(c2);
-      const Shape o = conv2d_output_shape(c2, b.conv3.params());
-      b.out.resize(o);
-      if (b.has_downsample) b.identity.resize(conv2d_output_shape(s, b.downsample.params()));
-      scratch_.require(b.conv1.params(), a.w);
-      scratch_.require(b.conv2.params(), c2.w);
-      scratch_.require(b.conv3.params(), o.w);
-      if (b.has_downsample) scratch_.require(b.downsample.params(), o.w);
-      s = o;
+  layer_out_.resize(layers_.size());
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    for (std::size_t i = 0; i < layers_[l].size(); ++i) {
+      Bottleneck& b = layers_[l][i];
+      b.a = conv2d_output_shape(s, b.conv1.params());
+      b.b = conv2d_output_shape(b.a, b.conv2.params());
+      b.out = conv2d_output_shape(b.b, b.conv3.params());
+      grow(a_max, b.a);
+      grow(b_max, b.b);
+      if (b.has_downsample) grow(id_max, conv2d_output_shape(s, b.downsample.params()));
+      if (i + 1 < layers_[l].size()) grow(pp_max, b.out);
+      scratch_.require(b.conv1.params(), b.a.w);
+      scratch_.require(b.conv2.params(), b.b.w);
+      scratch_.require(b.conv3.params(), b.out.w);
+      if (b.has_downsample) scratch_.require(b.downsample.params(), b.out.w);
+      s = b.out;
     }
+    layer_out_[l].resize(s);
+  }
+  tmp_a_.resize(a_max);
+  tmp_b_.resize(b_max);
+  tmp_identity_.resize(id_max);
+  for (auto& buf : pingpong_) buf.resize(pp_max);
   scratch_.allocate();
   outs_.reserve(layers_.size());
 }
 
 const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorView& in) {
-  conv2d(in, stem_, stem_out_.view(), scratch_.get(), Act::Relu);
-  max_pool2d(stem_out_.cview(), MaxPoolParams{}, pooled_.view());
+  const TensorView stem_out{pingpong_[0].data(), stem_shape_};
+  conv2d(in, stem_, stem_out, scratch_.get(), Act::Relu);
+  max_pool2d(ConstTensorView(stem_out.data, stem_out.shape), MaxPoolParams{}, pooled_.view());
   ConstTensorView x = pooled_.cview();
+  int next = 0;  // the ping-pong buffer the next inner block writes (never x's)
   outs_.clear();
-  for (auto& layer : layers_) {
-    for (Bottleneck& b : layer) {
-      conv2d(x, b.conv1, b.a.view(), scratch_.get(), Act::Relu);
-      conv2d(b.a.cview(), b.conv2, b.b.view(), scratch_.get(), Act::Relu);
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    for (std::size_t i = 0; i < layers_[l].size(); ++i) {
+      Bottleneck& b = layers_[l][i];
+      const TensorView a{tmp_a_.data(), b.a}, mid{tmp_b_.data(), b.b};
+      conv2d(x, b.conv1, a, scratch_.get(), Act::Relu);
+      conv2d(ConstTensorView(a.data, a.shape), b.conv2, mid, scratch_.get(), Act::Relu);
       const float* identity = x.data;
       if (b.has_downsample) {
-        conv2d(x, b.downsample, b.identity.view(), scratch_.get());
-        identity = b.identity.data.data();
+        conv2d(x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
+        identity = tmp_identity_.data();
       }
+      const bool last = i + 1 == layers_[l].size();
+      const TensorView out = last ? layer_out_[l].view() : TensorView{pingpong_[next].data(), b.out};
       // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
-      conv2d(b.b.cview(), b.conv3, b.out.view(), scratch_.get(), Act::Relu, identity, true);
-      x = b.out.cview();
+      conv2d(ConstTensorView(mid.data, mid.shape), b.conv3, out, scratch_.get(), Act::Relu, identity, true);
+      x = ConstTensorView(out.data, out.shape);
+      if (!last) next ^= 1;
     }
     outs_.push_back(x);
   }

@@ -25,10 +25,17 @@ class ResNet50Backbone : public Backbone {
   struct Bottleneck {
     Conv2dWeights conv1, conv2, conv3, downsample;
     bool has_downsample = false;
-    Activation a, b, identity, out;
+    Shape a, b, out;  // planned output shapes of conv1, conv2, conv3 (= downsample's)
   };
   Conv2dWeights stem_;
-  Activation stem_out_, pooled_;
+  Shape stem_shape_;
+  Activation pooled_;
+  // Memory shared by all blocks: conv1 and conv2 outputs and the downsampled identity
+  // live only inside a block; block outputs alternate between two buffers (the first
+  // also holds the stem output, dead after the max pool); only each layer's last
+  // output, which the FPN reads, has a buffer of its own.
+  AlignedBuffer tmp_a_, tmp_b_, tmp_identity_, pingpong_[2];
+  std::vector<Activation> layer_out_;
   std::vector<std::vector<Bottleneck>> layers_;
   ConvScratch scratch_;
   std::vector<ConstTensorView> outs_;
