@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "nn/activation.h"
+#include "nn/error.h"
 #include "nn/pool.h"
 
 namespace nn::detection {
@@ -110,18 +111,26 @@ MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const s
   last_ = load_conv_bn(st, prefix + "16.0.weight", prefix + "16.1.", conv_params(160, kLast, 1, 1), eps);
 }
 
+// torchvision's return_layers: the FPN reads the output of features[13] (block index 12).
+constexpr std::size_t kC13Block = 12;
+
 void MobileNetV3Backbone::plan(int h, int w) {
-  Shape s = conv2d_output_shape({1, h, w, 3}, stem_.params());
+  std::size_t a_max = 0, b_max = 0, pp_max = 0;
+  auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
+  Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
+  grow(pp_max, s);
   scratch_ = ConvScratch();
   scratch_.require(stem_.params(), s.w);
-  stem_out_.resize(s);
-  for (Block& b : blocks_) {
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    Block& b = blocks_[i];
     if (b.has_expand) {
       scratch_.require(b.expand.params(), s.w);
-      b.a.resize({1, s.h, s.w, b.exp});
+      b.a = {1, s.h, s.w, b.exp};
+      grow(a_max, b.a);
     }
     s = dwconv_output_shape({1, s.h, s.w, b.exp}, b.dw.params());
-    b.b.resize(s);
+    b.b = s;
+    grow(b_max, s);
     if (b.se) {
       b.pooled.resize({1, 1, 1, b.exp});
       b.squeezed.resize({1, 1, 1, b.se});
@@ -129,24 +138,32 @@ void MobileNetV3Backbone::plan(int h, int w) {
     }
     scratch_.require(b.project.params(), s.w);
     s.c = b.cout;
-    b.out.resize(s);
+    b.out = s;
+    if (i == kC13Block) c13_out_.resize(s);
+    else grow(pp_max, s);
   }
+  if (blocks_.size() <= kC13Block) throw Error("MobileNetV3: fewer blocks than the FPN reads");
+  tmp_a_.resize(a_max);
+  tmp_b_.resize(b_max);
+  for (auto& buf : pingpong_) buf.resize(pp_max);
   scratch_.require(last_.params(), s.w);
   last_out_.resize({1, s.h, s.w, kLast});
   scratch_.allocate();
   outs_.reserve(2);
 }
 
-void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in) {
+void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const TensorView& out) {
   ConstTensorView x = in;
   if (b.has_expand) {
-    conv2d(x, b.expand, b.a.view(), scratch_.get(), b.act);
-    x = b.a.cview();
+    const TensorView a{tmp_a_.data(), b.a};
+    conv2d(x, b.expand, a, scratch_.get(), b.act);
+    x = a;
   }
-  dwconv(x, b.dw, b.b.view());
+  const TensorView mid{tmp_b_.data(), b.b};
+  dwconv(x, b.dw, mid);
   if (b.se) {
     // Squeeze-excitation: hardsigmoid(fc2(relu(fc1(mean)))) scales every pixel.
-    global_avg_pool(b.b.cview(), b.pooled.view());
+    global_avg_pool(mid, b.pooled.view());
     GemmEpilogue e1;
     e1.bias = b.fc1_bias.data(), e1.act = Act::Relu;
     gemm(1, b.pooled.data.data(), b.exp, b.fc1, b.squeezed.data.data(), b.se, e1);
@@ -154,25 +171,27 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in) {
     e2.bias = b.fc2_bias.data(), e2.act = Act::HardSigmoid;
     gemm(1, b.squeezed.data.data(), b.se, b.fc2, b.excited.data.data(), b.exp, e2);
     const float* sc = b.excited.data.data();
-    float* d = b.b.data.data();
-    const std::size_t pixels = b.b.cview().pixels();
+    float* d = mid.data;
+    const std::size_t pixels = ConstTensorView(mid).pixels();
     for (std::size_t px = 0; px < pixels; ++px)
       for (int c = 0; c < b.exp; ++c) d[px * b.exp + c] *= sc[c];
   }
-  conv2d(b.b.cview(), b.project, b.out.view(), scratch_.get(), Act::None, b.residual ? in.data : nullptr);
+  conv2d(mid, b.project, out, scratch_.get(), Act::None, b.residual ? in.data : nullptr);
 }
 
 const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTensorView& in) {
-  conv2d(in, stem_, stem_out_.view(), scratch_.get(), Act::HardSwish);
-  ConstTensorView x = stem_out_.cview();
-  ConstTensorView c13;
+  const TensorView stem_out{pingpong_[0].data(), stem_shape_};
+  conv2d(in, stem_, stem_out, scratch_.get(), Act::HardSwish);
+  ConstTensorView x = stem_out;
+  int next = 1;  // the ping-pong buffer the next block writes (never x's)
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
-    run_block(blocks_[i], x);
-    x = blocks_[i].out.cview();
-    if (i + 1 == 13) c13 = x;
+    const TensorView out = i == kC13Block ? c13_out_.view() : TensorView{pingpong_[next].data(), blocks_[i].out};
+    run_block(blocks_[i], x, out);
+    x = out;
+    if (i != kC13Block) next ^= 1;
   }
   conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
-  outs_.assign({c13, last_out_.cview()});
+  outs_.assign({c13_out_.cview(), last_out_.cview()});
   return outs_;
 }
 

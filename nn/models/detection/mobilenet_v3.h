@@ -32,13 +32,19 @@ class MobileNetV3Backbone : public Backbone {
     DwConvWeights dw;
     GemmWeights fc1, fc2;
     AlignedBuffer fc1_bias, fc2_bias;
-    Activation a, b, out, pooled, squeezed, excited;
+    Shape a, b, out;  // planned outputs of expand, depthwise, project
+    Activation pooled, squeezed, excited;
   };
-  void run_block(Block& blk, const ConstTensorView& in);
+  void run_block(Block& blk, const ConstTensorView& in, const TensorView& out);
 
   Conv2dWeights stem_, last_;
   std::vector<Block> blocks_;
-  Activation stem_out_, last_out_;
+  Shape stem_shape_;
+  // Expand and depthwise outputs live only inside a block: one buffer each for all
+  // blocks. Block outputs alternate between two buffers (the first also holds the
+  // stem output); block 13's output, which the FPN reads, has its own.
+  AlignedBuffer tmp_a_, tmp_b_, pingpong_[2];
+  Activation c13_out_, last_out_;
   ConvScratch scratch_;
   std::vector<ConstTensorView> outs_;
 };
