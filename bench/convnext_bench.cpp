@@ -4,7 +4,9 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <map>
 #include <memory>
+#include <string>
 
 #include "bench/peak.h"
 #include "nn/models/convnext.h"
@@ -43,6 +45,54 @@ void BM_ConvNeXtTiny(benchmark::State& state) {
   state.counters["peak_RSS_MB"] = peak_rss_mb();
   nn::set_num_threads(0);
 }
+
+// Where the time goes: per group of layers (stem, each stage's depthwise convs, each
+// stage's fused MLP blocks, each downsampling), GFLOP/s and percent of the measured
+// peak, from the model's profiler. Read with --benchmark_counters_tabular=true.
+std::string group_of(const nn::ProfileEntry& e) {
+  const std::string stage = e.layer.substr(0, e.layer.find('.', e.layer.find('.') + 1));  // "features.N"
+  const std::string n = stage.substr(stage.find('.') + 1);
+  if (e.op.rfind("dwconv", 0) == 0) return "f" + n + ".dw";
+  if (e.op.rfind("LN+pw1", 0) == 0) return "f" + n + ".mlp";
+  return "f" + n + (n == "0" ? ".stem" : ".down");
+}
+
+void BM_ConvNeXtTinyLayers(benchmark::State& state) {
+  const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
+  const int threads = static_cast<int>(state.range(2));
+  nn::set_num_threads(threads);
+  nn::ConvNeXt model(tiny_weights());
+  model.plan(1, h, w);
+  nn::SplitMix64 rng(7);
+  std::vector<float> x(static_cast<std::size_t>(3) * h * w);
+  for (auto& v : x) v = static_cast<float>(255.0 * rng.uniform());
+  model.forward(x.data());
+  model.profiler().set_enabled(true);
+  model.profiler().reset_times();
+  for (auto _ : state) benchmark::DoNotOptimize(model.forward(x.data()).data);
+  std::map<std::string, std::pair<double, double>> groups;  // name -> (flops, ms) per forward
+  for (const auto& e : model.profiler().entries()) {
+    if (e.calls == 0) continue;
+    auto& g = groups[group_of(e)];
+    g.first += e.flops;
+    g.second += e.total_ms / e.calls;
+  }
+  const double peak = nnbench::peak_gflops(threads);
+  for (const auto& [name, g] : groups) {
+    const double gflops = g.first / (g.second * 1e6);
+    state.counters[name + "_ms"] = g.second;
+    state.counters[name + "_pct"] = 100.0 * gflops / peak;
+  }
+  nn::set_num_threads(0);
+}
+
+BENCHMARK(BM_ConvNeXtTinyLayers)
+    ->ArgNames({"h", "w", "threads"})
+    ->Args({1280, 1920, 2})
+    ->Args({224, 224, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 BENCHMARK(BM_ConvNeXtTiny)
     ->ArgNames({"h", "w", "threads"})
