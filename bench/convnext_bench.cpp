@@ -28,22 +28,35 @@ double peak_rss_mb() {
   return ru.ru_maxrss / 1024.0;
 }
 
+// ConvNeXt-Tiny planned for the benchmark's (h, w, threads) arguments, with a seeded
+// random frame, after one warm-up pass (the first touch of the arena).
+struct TinyRun {
+  explicit TinyRun(const benchmark::State& state)
+      : threads(static_cast<int>(state.range(2))), model(tiny_weights()) {
+    const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
+    nn::set_num_threads(threads);
+    model.plan(1, h, w);
+    nn::SplitMix64 rng(7);
+    x.resize(static_cast<std::size_t>(3) * h * w);
+    for (auto& v : x) v = static_cast<float>(255.0 * rng.uniform());
+    model.forward(x.data());
+  }
+  ~TinyRun() { nn::set_num_threads(0); }
+  int threads;
+  nn::ConvNeXt model;
+  std::vector<float> x;
+};
+
 void BM_ConvNeXtTiny(benchmark::State& state) {
-  const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
-  const int threads = static_cast<int>(state.range(2));
-  nn::set_num_threads(threads);
-  nn::ConvNeXt model(tiny_weights());
-  model.plan(1, h, w);
-  nn::SplitMix64 rng(7);
-  std::vector<float> x(static_cast<std::size_t>(3) * h * w);
-  for (auto& v : x) v = static_cast<float>(255.0 * rng.uniform());
-  model.forward(x.data());  // warm-up: first touch of the arena
+  TinyRun run(state);
+  nn::ConvNeXt& model = run.model;
+  const std::vector<float>& x = run.x;
+  const int threads = run.threads;
   for (auto _ : state) benchmark::DoNotOptimize(model.forward(x.data()).data);
   nnbench::set_flop_counters(state, model.flops(), threads);
   state.counters["arena_MB"] = model.arena_bytes() / 1e6;
   state.counters["weights_MB"] = model.weight_bytes() / 1e6;
   state.counters["peak_RSS_MB"] = peak_rss_mb();
-  nn::set_num_threads(0);
 }
 
 // Where the time goes: per group of layers (stem, each stage's depthwise convs, each
@@ -58,15 +71,10 @@ std::string group_of(const nn::ProfileEntry& e) {
 }
 
 void BM_ConvNeXtTinyLayers(benchmark::State& state) {
-  const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
-  const int threads = static_cast<int>(state.range(2));
-  nn::set_num_threads(threads);
-  nn::ConvNeXt model(tiny_weights());
-  model.plan(1, h, w);
-  nn::SplitMix64 rng(7);
-  std::vector<float> x(static_cast<std::size_t>(3) * h * w);
-  for (auto& v : x) v = static_cast<float>(255.0 * rng.uniform());
-  model.forward(x.data());
+  TinyRun run(state);
+  nn::ConvNeXt& model = run.model;
+  const std::vector<float>& x = run.x;
+  const int threads = run.threads;
   model.profiler().set_enabled(true);
   model.profiler().reset_times();
   for (auto _ : state) benchmark::DoNotOptimize(model.forward(x.data()).data);
@@ -83,7 +91,6 @@ void BM_ConvNeXtTinyLayers(benchmark::State& state) {
     state.counters[name + "_ms"] = g.second;
     state.counters[name + "_pct"] = 100.0 * gflops / peak;
   }
-  nn::set_num_threads(0);
 }
 
 BENCHMARK(BM_ConvNeXtTinyLayers)
