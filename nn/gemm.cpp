@@ -176,11 +176,16 @@ void check_call(int m, std::ptrdiff_t lda, const GemmWeights& w, const float* a,
     throw Error("gemm: ldr " + std::to_string(ep.ldr) + " < N " + std::to_string(w.n()));
 }
 
-// Rows [m0, m1) and panels [p0, p1) of C; single-threaded.
-void gemm_block(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t lda,
-                const GemmWeights& w, float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep) {
+GemmPacked packed(const GemmWeights& w) {
   const GemmUkernelInfo& info = gemm_ukernel(w.ukernel());
-  const int mr = info.mr, nr = info.nr, n = w.n(), k = w.k();
+  return {w.panels(), w.n(), w.k(), info.mr, info.nr, info.fn};
+}
+
+}  // namespace
+
+void gemm_blocked(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t lda,
+                  const GemmPacked& w, float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep) {
+  const int mr = w.mr, nr = w.nr, n = w.n, k = w.k;
   // A block of at most a few hundred rows (a thread's share of a small-M GEMM split by
   // columns) is one row block when its partial sums fit the scratch tile: W then streams
   // from L3 once instead of once per kMc rows. Blocking never changes the K order.
@@ -195,7 +200,7 @@ void gemm_block(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t l
   const int chunk = kblocks == 1 ? p1 - p0 : kPartialFloats / (mc * nr);
   const std::ptrdiff_t ldp = static_cast<std::ptrdiff_t>(chunk) * nr;
   alignas(64) float partial[kPartialFloats];
-  const float* panels = w.panels();
+  const float* panels = w.panels;
   const std::size_t panel_stride = static_cast<std::size_t>(k) * nr;
   auto w_block = [&](int j, int kb) {
     return panels + j * panel_stride + static_cast<std::size_t>(kb) * kc * nr;
@@ -255,7 +260,7 @@ void gemm_block(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t l
               t.ldc = ldp;
               t.ep = nullptr;
             }
-            info.fn(t);
+            w.fn(t);
           }
         }
       }
@@ -263,29 +268,13 @@ void gemm_block(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t l
   }
 }
 
-int panel_count(const GemmWeights& w) {
-  const int nr = gemm_ukernel(w.ukernel()).nr;
-  return (w.n() + nr - 1) / nr;
-}
-
-}  // namespace
-
-void gemm(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
-          std::ptrdiff_t ldc, const GemmEpilogue& ep) {
-  check_call(m, lda, w, a, c, ldc, ep);
-  if (m == 0) return;
-  gemm_block(0, m, 0, panel_count(w), a, lda, w, c, ldc, ep);
-}
-
-void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
-                   std::ptrdiff_t ldc, const GemmEpilogue& ep) {
-  check_call(m, lda, w, a, c, ldc, ep);
-  if (m == 0) return;
-  const int panels = panel_count(w);
+void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, float* c,
+                std::ptrdiff_t ldc, const GemmEpilogue& ep) {
+  const int panels = (w.n + w.nr - 1) / w.nr;
 #ifdef ROADNN_OPENMP
   const int threads = omp_in_parallel() ? 1 : omp_get_max_threads();
   if (threads > 1) {
-    const int mr = gemm_ukernel(w.ukernel()).mr;
+    const int mr = w.mr;
     const int row_tiles = (m + mr - 1) / mr;
     // Rows alone when every thread gets a few row blocks; otherwise a grid that also
     // splits the panels. Either way each element is computed once, by the same kernel.
@@ -302,12 +291,27 @@ void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights&
       const int rows_per = (row_tiles + tm - 1) / tm * mr;
       const int r0 = std::min(m, im * rows_per), r1 = std::min(m, r0 + rows_per);
       const int p0 = in * panels / tn, p1 = (in + 1) * panels / tn;
-      if (r0 < r1 && p0 < p1) gemm_block(r0, r1, p0, p1, a, lda, w, c, ldc, ep);
+      if (r0 < r1 && p0 < p1) gemm_blocked(r0, r1, p0, p1, a, lda, w, c, ldc, ep);
     }
     return;
   }
 #endif
-  gemm_block(0, m, 0, panels, a, lda, w, c, ldc, ep);
+  gemm_blocked(0, m, 0, panels, a, lda, w, c, ldc, ep);
+}
+
+void gemm(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
+          std::ptrdiff_t ldc, const GemmEpilogue& ep) {
+  check_call(m, lda, w, a, c, ldc, ep);
+  if (m == 0) return;
+  const GemmPacked p = packed(w);
+  gemm_blocked(0, m, 0, (p.n + p.nr - 1) / p.nr, a, lda, p, c, ldc, ep);
+}
+
+void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
+                   std::ptrdiff_t ldc, const GemmEpilogue& ep) {
+  check_call(m, lda, w, a, c, ldc, ep);
+  if (m == 0) return;
+  gemm_split(m, a, lda, packed(w), c, ldc, ep);
 }
 
 void gemm_ref(int m, int n, int k, const float* a, std::ptrdiff_t lda, const float* w, float* c,

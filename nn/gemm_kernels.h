@@ -88,4 +88,23 @@ const GemmUkernelInfo& gemm_ukernel(int ukernel);
 // Index of the default kernel for `isa`.
 int gemm_default_ukernel(Isa isa);
 
+// The blocking and threading driver of gemm.cpp, for any kernel whose A and W elements
+// are 4 bytes wide: floats, or the bf16 GEMM's K pairs (nn/gemm_bf16.cpp passes its
+// pair arrays here with K, lda and the panels counted in pairs). C, the partial sums and
+// the epilogue are float either way.
+struct GemmPacked {
+  const float* panels;  // [ceil(n / nr)][k][nr] elements of 4 bytes
+  int n, k;             // k in elements of A's rows
+  int mr, nr;
+  GemmUkernelFn fn;
+};
+struct GemmEpilogue;
+// Rows [m0, m1), panels [p0, p1), single-threaded.
+void gemm_blocked(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t lda,
+                  const GemmPacked& w, float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep);
+// All rows, split over the OpenMP team (rows, or columns for small M); bitwise equal to
+// gemm_blocked over everything.
+void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, float* c,
+                std::ptrdiff_t ldc, const GemmEpilogue& ep);
+
 }  // namespace nn
