@@ -1,14 +1,18 @@
-# Run-time ISA dispatch: a source file whose name ends in _avx2.cpp or _avx512.cpp is
-# compiled with that instruction set enabled; every other file is baseline x86-64.
+# Run-time ISA dispatch: a source file whose name ends in _avx2.cpp, _avx512.cpp or
+# _avx512bf16.cpp (AVX-512 plus AVX512_BF16) is compiled with that instruction set
+# enabled; every other file is baseline x86-64.
 # Such files must only export plain functions with the ISA in their name and keep all
 # helpers in an anonymous namespace: an inline function or template instantiated there
 # could otherwise be picked by the linker for baseline callers (and fault on older CPUs).
 set(ROADNN_AVX2_FLAGS -mavx2 -mfma -mf16c)
 set(ROADNN_AVX512_FLAGS -mavx512f -mavx512bw -mavx512dq -mavx512vl -mavx2 -mfma -mf16c)
+set(ROADNN_AVX512BF16_FLAGS ${ROADNN_AVX512_FLAGS} -mavx512bf16)
 
 function(roadnn_isa_flags)
   foreach(src IN LISTS ARGN)
-    if(src MATCHES "_avx512\\.cpp$")
+    if(src MATCHES "_avx512bf16\\.cpp$")
+      set_source_files_properties(${src} PROPERTIES COMPILE_OPTIONS "${ROADNN_AVX512BF16_FLAGS}")
+    elseif(src MATCHES "_avx512\\.cpp$")
       set_source_files_properties(${src} PROPERTIES COMPILE_OPTIONS "${ROADNN_AVX512_FLAGS}")
     elseif(src MATCHES "_avx2\\.cpp$")
       set_source_files_properties(${src} PROPERTIES COMPILE_OPTIONS "${ROADNN_AVX2_FLAGS}")

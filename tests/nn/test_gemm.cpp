@@ -1,6 +1,6 @@
-// GEMM: every micro-kernel of the list in nn/gemm_kernels.h against gemm_ref on awkward
-// shapes and every epilogue; bitwise determinism across row splits, thread counts and
-// K blocking; argument errors.
+// GEMM: every micro-kernel of the list in nn/gemm_kernels.h, and the bf16 GEMM of
+// nn/gemm_bf16.h, against gemm_ref on awkward shapes and every epilogue; bitwise
+// determinism across row splits, thread counts and K blocking; argument errors.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +13,7 @@
 #include "nn/activation.h"
 #include "nn/error.h"
 #include "nn/gemm.h"
+#include "nn/gemm_bf16.h"
 #include "nn/gemm_kernels.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
@@ -38,17 +39,63 @@ std::vector<float> random_vector(std::size_t n, unsigned seed, float lo = -1.0f,
   return v;
 }
 
-std::vector<int> supported_ukernels() {
-  std::vector<int> out;
+// A packed GEMM under test: one float micro-kernel of the list, or the bf16 GEMM. The
+// bf16 GEMM's tests draw A and W already representable in bfloat16, so its rounding is
+// exact and gemm_ref is its exact reference too.
+struct Variant {
+  int ukernel = -1;  // -1: the bf16 GEMM
+  int mr = 0;
+  std::string name;
+  bool bf16() const { return ukernel < 0; }
+};
+
+std::vector<Variant> supported_variants() {
+  std::vector<Variant> out;
   for (int i = 0; i < nn::gemm_ukernel_count(); ++i)
     if (static_cast<int>(nn::gemm_ukernel(i).isa) <= static_cast<int>(nn::detect_isa()))
-      out.push_back(i);
+      out.push_back({i, nn::gemm_ukernel(i).mr, nn::gemm_ukernel(i).name});
+  if (nn::bf16_gemm_available()) out.push_back({-1, 8, nn::gemm_bf16_kernel_name()});
   return out;
 }
 
-std::string ukernel_test_name(const testing::TestParamInfo<int>& info) {
-  return nn::gemm_ukernel(info.param).name;
+void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
+
+std::string variant_test_name(const testing::TestParamInfo<Variant>& info) { return info.param.name; }
+
+// Random values for A or W; for the bf16 GEMM rounded to bfloat16 (exactly representable).
+std::vector<float> operand(const Variant& v, std::size_t n, unsigned seed) {
+  std::vector<float> x = random_vector(n, seed);
+  if (v.bf16())
+    for (float& e : x) e = nn::bf16_to_f32(nn::f32_to_bf16(e));
+  return x;
 }
+
+class PackedProduct {
+ public:
+  PackedProduct(const Variant& v, const float* w, int n, int k) : k_(k) {
+    if (v.bf16())
+      bf16_ = nn::GemmWeightsBf16::pack(w, n, k);
+    else
+      f32_ = GemmWeights::pack_for_ukernel(w, n, k, v.ukernel);
+  }
+  void gemm(int m, const float* a, std::ptrdiff_t lda, float* c, std::ptrdiff_t ldc,
+            const GemmEpilogue& ep, bool parallel = false) const {
+    if (bf16_.empty()) {
+      if (parallel) return nn::gemm_parallel(m, a, lda, f32_, c, ldc, ep);
+      return nn::gemm(m, a, lda, f32_, c, ldc, ep);
+    }
+    const std::ptrdiff_t ldb = k_ + (k_ & 1) + 2;  // even, and wider than the row
+    std::vector<nn::bf16> ab(static_cast<std::size_t>(std::max(m, 1)) * ldb, 0xFFFF);
+    nn::convert_to_bf16(m, k_, a, lda, ab.data(), ldb);
+    if (parallel) return nn::gemm_bf16_parallel(m, ab.data(), ldb, bf16_, c, ldc, ep);
+    nn::gemm_bf16(m, ab.data(), ldb, bf16_, c, ldc, ep);
+  }
+
+ private:
+  int k_;
+  GemmWeights f32_;
+  nn::GemmWeightsBf16 bf16_;
+};
 
 enum class Residual { None, Separate, AliasC };
 
@@ -71,12 +118,12 @@ std::string describe(int m, int n, int k, const EpilogueCase& e) {
 // One product through the packed kernel and through gemm_ref, compared element-wise:
 // |y - ref| <= 1.5 * 1e-5 * sum_k |a||w| * max(1, |scale|) + 1e-6 * |ref| + 3e-6
 // (1.5: the largest activation slope; 3e-6 covers the vector GELU/sigmoid error).
-void check_product(int ukernel, int m, int n, int k, const EpilogueCase& e, unsigned seed) {
+void check_product(const Variant& v, int m, int n, int k, const EpilogueCase& e, unsigned seed) {
   SCOPED_TRACE(describe(m, n, k, e));
   const std::ptrdiff_t lda = k + 5, ldc = n + 3;
   const std::ptrdiff_t ldr = e.residual == Residual::AliasC ? ldc : n + 7;
-  const std::vector<float> a = random_vector(static_cast<std::size_t>(m) * lda, seed);
-  const std::vector<float> w = random_vector(static_cast<std::size_t>(n) * k, seed + 1);
+  const std::vector<float> a = operand(v, static_cast<std::size_t>(m) * lda, seed);
+  const std::vector<float> w = operand(v, static_cast<std::size_t>(n) * k, seed + 1);
   const std::vector<float> bias = random_vector(n, seed + 2);
   const std::vector<float> scale = random_vector(n, seed + 3, -2.0f, 2.0f);
   const std::vector<float> res =
@@ -99,8 +146,8 @@ void check_product(int ukernel, int m, int n, int k, const EpilogueCase& e, unsi
     ep.ldr = ldr;
     return ep;
   };
-  const GemmWeights packed = GemmWeights::pack_for_ukernel(w.data(), n, k, ukernel);
-  nn::gemm(m, a.data(), lda, packed, c.data(), ldc, make_ep(c.data()));
+  const PackedProduct packed(v, w.data(), n, k);
+  packed.gemm(m, a.data(), lda, c.data(), ldc, make_ep(c.data()));
   nn::gemm_ref(m, n, k, a.data(), lda, w.data(), c_ref.data(), ldc, make_ep(c_ref.data()));
   int failures = 0;
   for (int i = 0; i < m && failures < 5; ++i) {
@@ -125,14 +172,11 @@ void check_product(int ukernel, int m, int n, int k, const EpilogueCase& e, unsi
   }
 }
 
-class GemmUkernelTest : public testing::TestWithParam<int> {
- protected:
-  const nn::GemmUkernelInfo& info() const { return nn::gemm_ukernel(GetParam()); }
-};
+class GemmUkernelTest : public testing::TestWithParam<Variant> {};
 
 // Every awkward size against the reference; the epilogue rotates through all variants.
 TEST_P(GemmUkernelTest, MatchesReferenceOnAwkwardShapes) {
-  const int mr = info().mr;
+  const int mr = GetParam().mr;
   std::vector<int> ms = {1, 2, mr - 1, mr, mr + 1, 37, 200};
   ms.erase(std::remove_if(ms.begin(), ms.end(), [](int v) { return v < 1; }), ms.end());
   std::sort(ms.begin(), ms.end());
@@ -157,7 +201,7 @@ TEST_P(GemmUkernelTest, MatchesReferenceOnAwkwardShapes) {
 
 // Every epilogue combination on shapes with row and column tails and K blocking.
 TEST_P(GemmUkernelTest, EveryEpilogueCombination) {
-  const int shapes[][3] = {{info().mr + 3, 37, 20}, {29, 100, 600}};
+  const int shapes[][3] = {{GetParam().mr + 3, 37, 20}, {29, 100, 600}};
   unsigned seed = 1000;
   for (const auto& s : shapes)
     for (bool bias : {false, true})
@@ -189,13 +233,12 @@ struct DeterminismCase {
 // Runs C = epilogue(A W^T) with the residual aliasing C, starting from the same C.
 class AliasedProduct {
  public:
-  AliasedProduct(int ukernel, int m, int n, int k)
+  AliasedProduct(const Variant& v, int m, int n, int k)
       : m_(m), lda_(k + 1), ldc_(n + 2),
-        a_(random_vector(static_cast<std::size_t>(m) * lda_, 11)),
+        a_(operand(v, static_cast<std::size_t>(m) * lda_, 11)),
         c0_(random_vector(static_cast<std::size_t>(m) * ldc_, 12)),
         bias_(random_vector(n, 13)), scale_(random_vector(n, 14)),
-        w_(GemmWeights::pack_for_ukernel(random_vector(static_cast<std::size_t>(n) * k, 15).data(),
-                                         n, k, ukernel)) {}
+        w_(v, operand(v, static_cast<std::size_t>(n) * k, 15).data(), n, k) {}
 
   GemmEpilogue epilogue(float* c) const {
     GemmEpilogue ep;
@@ -214,7 +257,7 @@ class AliasedProduct {
     std::vector<float> c = fresh_c();
     for (std::size_t i = 0; i + 1 < bounds.size(); ++i) {
       float* ci = c.data() + static_cast<std::size_t>(bounds[i]) * ldc_;
-      nn::gemm(bounds[i + 1] - bounds[i], a_row(bounds[i]), lda_, w_, ci, ldc_, epilogue(ci));
+      w_.gemm(bounds[i + 1] - bounds[i], a_row(bounds[i]), lda_, ci, ldc_, epilogue(ci));
     }
     return c;
   }
@@ -222,7 +265,7 @@ class AliasedProduct {
     std::vector<float> c = fresh_c();
     const int saved = nn::num_threads();
     nn::set_num_threads(threads);
-    nn::gemm_parallel(m_, a_.data(), lda_, w_, c.data(), ldc_, epilogue(c.data()));
+    w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
     nn::set_num_threads(saved);
     return c;
   }
@@ -236,7 +279,7 @@ class AliasedProduct {
     for (int i = 0; i < chunks; ++i) {
       const int r0 = i * rows, r1 = std::min(m_, r0 + rows);
       float* ci = c.data() + static_cast<std::size_t>(r0) * ldc_;
-      nn::gemm(r1 - r0, a_row(r0), lda_, w_, ci, ldc_, epilogue(ci));
+      w_.gemm(r1 - r0, a_row(r0), lda_, ci, ldc_, epilogue(ci));
     }
     return c;
   }
@@ -247,7 +290,7 @@ class AliasedProduct {
 #pragma omp parallel num_threads(2)
 #pragma omp single
 #endif
-    nn::gemm_parallel(m_, a_.data(), lda_, w_, c.data(), ldc_, epilogue(c.data()));
+    w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
     return c;
   }
   int m() const { return m_; }
@@ -256,7 +299,7 @@ class AliasedProduct {
   int m_;
   std::ptrdiff_t lda_, ldc_;
   std::vector<float> a_, c0_, bias_, scale_;
-  GemmWeights w_;
+  PackedProduct w_;
 };
 
 void expect_same_bits(const std::vector<float>& x, const std::vector<float>& y, const char* what) {
@@ -293,8 +336,8 @@ TEST_P(GemmUkernelTest, BitwiseIdenticalForAnySplit) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllKernels, GemmUkernelTest, testing::ValuesIn(supported_ukernels()),
-                         ukernel_test_name);
+INSTANTIATE_TEST_SUITE_P(AllKernels, GemmUkernelTest, testing::ValuesIn(supported_variants()),
+                         variant_test_name);
 
 class GemmIsaTest : public testing::TestWithParam<nn::Isa> {};
 
