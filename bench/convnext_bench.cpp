@@ -9,6 +9,7 @@
 #include <string>
 
 #include "bench/peak.h"
+#include "nn/gemm_bf16.h"
 #include "nn/models/convnext.h"
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
@@ -31,8 +32,8 @@ double peak_rss_mb() {
 // ConvNeXt-Tiny planned for the benchmark's (h, w, threads) arguments, with a seeded
 // random frame, after one warm-up pass (the first touch of the arena).
 struct TinyRun {
-  explicit TinyRun(const benchmark::State& state)
-      : threads(static_cast<int>(state.range(2))), model(tiny_weights()) {
+  explicit TinyRun(const benchmark::State& state, nn::Precision precision = nn::Precision::F32)
+      : threads(static_cast<int>(state.range(2))), model(tiny_weights(), "features.", precision) {
     const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
     nn::set_num_threads(threads);
     model.plan(1, h, w);
@@ -47,8 +48,8 @@ struct TinyRun {
   std::vector<float> x;
 };
 
-void BM_ConvNeXtTiny(benchmark::State& state) {
-  TinyRun run(state);
+void run_whole(benchmark::State& state, nn::Precision precision) {
+  TinyRun run(state, precision);
   nn::ConvNeXt& model = run.model;
   const std::vector<float>& x = run.x;
   const int threads = run.threads;
@@ -57,6 +58,14 @@ void BM_ConvNeXtTiny(benchmark::State& state) {
   state.counters["arena_MB"] = model.arena_bytes() / 1e6;
   state.counters["weights_MB"] = model.weight_bytes() / 1e6;
   state.counters["peak_RSS_MB"] = peak_rss_mb();
+}
+
+void BM_ConvNeXtTiny(benchmark::State& state) { run_whole(state, nn::Precision::F32); }
+
+// The optional bf16 MLP GEMMs (--precision bf16); needs AVX512_BF16.
+void BM_ConvNeXtTinyBf16(benchmark::State& state) {
+  if (!nn::bf16_gemm_available()) return state.SkipWithError("no AVX512_BF16 on this CPU");
+  run_whole(state, nn::Precision::Bf16);
 }
 
 // Where the time goes: per group of layers (stem, each stage's depthwise convs, each
@@ -106,6 +115,14 @@ BENCHMARK(BM_ConvNeXtTiny)
     ->Args({224, 224, 1})
     ->Args({224, 224, 2})
     ->Args({1280, 1920, 1})
+    ->Args({1280, 1920, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
+
+BENCHMARK(BM_ConvNeXtTinyBf16)
+    ->ArgNames({"h", "w", "threads"})
+    ->Args({224, 224, 2})
     ->Args({1280, 1920, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()

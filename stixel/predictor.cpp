@@ -75,7 +75,7 @@ std::vector<float> scale_intrinsics(const std::vector<float>& K, int w0, int h0,
 }
 
 Predictor::Predictor(const weights::SafeTensors& st, const ModelSettings& settings)
-    : settings_(settings), model_(st, settings.head) {
+    : settings_(settings), model_(st, settings.head, settings.precision) {
   if (settings_.anchors.size() != nn::StixelHead::kCandidates)
     throw Error(st.source() + ": the head predicts 64 candidates but the anchor set has " +
                 std::to_string(settings_.anchors.size()));

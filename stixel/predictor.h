@@ -34,6 +34,7 @@ struct ModelSettings {
   Anchors anchors = tangent_anchors();
   Normalization normalization = Normalization::Raw255;
   std::optional<nn::StixelHeadVariant> head;
+  nn::Precision precision = nn::Precision::F32;  // a run option, never read from metadata
   int effective_columns() const { return columns > 0 ? columns : input_width / stixel_width; }
 };
 

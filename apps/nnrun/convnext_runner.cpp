@@ -13,7 +13,8 @@ namespace {
 
 class ConvNeXtRunner : public Runner {
  public:
-  ConvNeXtRunner(const std::string& name, const weights::SafeTensors& w) : model_(w) {
+  ConvNeXtRunner(const std::string& name, const weights::SafeTensors& w, nn::Precision precision)
+      : model_(w, "features.", precision) {
     const nn::ConvNeXtConfig& cfg = model_.config();
     nn::ConvNeXtConfig want;
     if (name == "convnext_tiny") want = nn::convnext_tiny_config();
@@ -28,9 +29,10 @@ class ConvNeXtRunner : public Runner {
   std::vector<std::string> used_tensors() const override { return used_; }
 
   std::string describe() const override {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "ConvNeXt %s, packed weights %.1f MB",
-                  model_.config().describe().c_str(), model_.weight_bytes() / 1e6);
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "ConvNeXt %s, %s, packed weights %.1f MB",
+                  model_.config().describe().c_str(), nn::precision_name(model_.precision()),
+                  model_.weight_bytes() / 1e6);
     return buf;
   }
 
@@ -76,8 +78,9 @@ class ConvNeXtRunner : public Runner {
 
 }  // namespace
 
-std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w) {
-  return std::make_unique<ConvNeXtRunner>(name, w);
+std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w,
+                                      const RunOptions& options) {
+  return std::make_unique<ConvNeXtRunner>(name, w, options.precision);
 }
 
 }  // namespace nnrun

@@ -90,7 +90,8 @@ class DetectorRunner : public Runner {
 
 }  // namespace
 
-std::unique_ptr<Runner> make_detector(const std::string& name, const weights::SafeTensors& w) {
+std::unique_ptr<Runner> make_detector(const std::string& name, const weights::SafeTensors& w,
+                                      const RunOptions&) {
   return std::make_unique<DetectorRunner>(name, w);
 }
 

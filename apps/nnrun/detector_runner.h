@@ -8,6 +8,7 @@
 
 namespace nnrun {
 
-std::unique_ptr<Runner> make_detector(const std::string& name, const weights::SafeTensors& w);
+std::unique_ptr<Runner> make_detector(const std::string& name, const weights::SafeTensors& w,
+                                      const RunOptions& options);
 
 }  // namespace nnrun

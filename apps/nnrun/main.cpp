@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/precision_option.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/nnrun/detector_runner.h"
 #include "apps/nnrun/runner.h"
@@ -21,17 +22,17 @@ namespace nnrun {
 
 const std::vector<ModelInfo>& models() {
   static const std::vector<ModelInfo> list = {
-      {"convnext_tiny", "torchvision convnext_tiny().features: input [N,3,H,W] -> features [N,768,H/32,W/32]", make_convnext},
-      {"convnext_small", "torchvision convnext_small().features", make_convnext},
-      {"convnext_base", "torchvision convnext_base().features", make_convnext},
-      {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext},
+      {"convnext_tiny", "torchvision convnext_tiny().features: input [N,3,H,W] -> features [N,768,H/32,W/32]", make_convnext, true},
+      {"convnext_small", "torchvision convnext_small().features", make_convnext, true},
+      {"convnext_base", "torchvision convnext_base().features", make_convnext, true},
+      {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext, true},
       {"fasterrcnn_mobilenet_v3_large_fpn",
        "torchvision Faster R-CNN, MobileNetV3-Large FPN: input [1,3,H,W] RGB in [0,1] -> boxes [K,4], scores [K], "
        "labels [K] (I64) in input pixels",
-       make_detector},
+       make_detector, false},
       {"fasterrcnn_mobilenet_v3_large_320_fpn", "the same at 320/640 px (torchvision's low-resolution defaults)",
-       make_detector},
-      {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector},
+       make_detector, false},
+      {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector, false},
   };
   return list;
 }
@@ -66,7 +67,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string model, weights_path, input_path, output_path, isa_name;
+  std::string model, weights_path, input_path, output_path, isa_name, precision_name;
   int threads = 0, repeat = 0;
   bool profile = false, quiet = false, dump_proposals = false;
 
@@ -84,6 +85,7 @@ int main(int argc, char** argv) {
               "                            forward_ms min=.. median=.. max=.. (forward only, no loading or I/O)", &repeat);
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
   args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
+  args.option("precision", "P", std::string("ConvNeXt models: ") + apps::kPrecisionHelp, &precision_name);
   args.flag("dump-proposals", "detectors: also write the RPN proposals ('proposals' [P,4], 'proposal_scores' [P],\n"
             "                            in the pixels of the resized image 'proposal_image_size' [2] = H,W)",
             &dump_proposals);
@@ -108,13 +110,17 @@ int main(int argc, char** argv) {
     nn::set_isa(isa);
   }
   nn::set_num_threads(threads);
+  nnrun::RunOptions options;
+  options.precision = apps::precision_option(args, precision_name);
+  if (options.precision != nn::Precision::F32 && !info->has_precision)
+    args.fail("--precision " + precision_name + ": model '" + model + "' runs in f32 only (ConvNeXt models have bf16)");
 
   try {
     std::unique_ptr<nnrun::Runner> runner;
     {
       // The file's bytes are released once the model has repacked them.
       weights::SafeTensors w = weights::SafeTensors::load(weights_path);
-      runner = info->make(model, w);
+      runner = info->make(model, w, options);
       if (dump_proposals && !runner->enable_proposal_dump())
         args.fail("--dump-proposals: model '" + model + "' has no region proposals (detectors only)");
       apps::warn_unused_tensors("nnrun", w, runner->used_tensors(), model);

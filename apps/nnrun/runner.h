@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "nn/precision.h"
 #include "nn/profiler.h"
 #include "weights/safetensors.h"
 
@@ -29,15 +30,23 @@ class Runner {
   virtual bool enable_proposal_dump() { return false; }
 };
 
+// Command-line settings a model may take.
+struct RunOptions {
+  nn::Precision precision = nn::Precision::F32;
+};
+
 struct ModelInfo {
   const char* name;
   const char* help;
-  std::unique_ptr<Runner> (*make)(const std::string& name, const weights::SafeTensors& w);
+  std::unique_ptr<Runner> (*make)(const std::string& name, const weights::SafeTensors& w,
+                                  const RunOptions& options);
+  bool has_precision;  // takes --precision bf16
 };
 
 // Every model nnrun knows, in --help order.
 const std::vector<ModelInfo>& models();
 
-std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w);
+std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w,
+                                      const RunOptions& options);
 
 }  // namespace nnrun

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/precision_option.h"
 #include "apps/common/image_io.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/stixelnext/calibration.h"
@@ -84,7 +85,7 @@ bool parse_size(const std::string& text, int* h, int* w) {
 
 int main(int argc, char** argv) {
   std::string weights_path, calib_path, out_dir = "stixels", format = "stx1", head, anchors, norm, input_size,
-                                        cluster_axes = "0,2";
+                                        cluster_axes = "0,2", precision;
   double threshold = 0.36, train_focal = 0;
   int threads = 0, columns = 0, stixel_width = 0;
   bool overlay = false, bev = false, cluster = false, profile = false, embed_image = false, quiet = false;
@@ -105,6 +106,7 @@ int main(int argc, char** argv) {
               "calibration; 0,1 for Waymo vehicle-frame K/T)", &cluster_axes);
   args.option("threads", "N", "threads (default: all cores)", &threads);
   args.flag("profile", "print the network's per-layer time table", &profile);
+  args.option("precision", "P", apps::kPrecisionHelp, &precision);
   args.option("head", "V", "force the head variant v0..v4 (default: detected; v1 and v3 share their tensors)", &head);
   args.option("anchors", "SPEC", "depth anchors: tangent:4,66,64 (default) or linear:START,END,N", &anchors);
   args.option("normalization", "MODE", "raw255 (default, as trained), unit (/255) or imagenet", &norm);
@@ -132,6 +134,7 @@ int main(int argc, char** argv) {
       axis_b > 2 || axis_a == axis_b)
     args.fail("--cluster-axes takes two different axes out of 0,1,2, e.g. 0,2");
   nn::set_num_threads(threads);
+  const nn::Precision prec = apps::precision_option(args, precision);
 
   std::unique_ptr<stixel::Predictor> predictor;
   stixelnext::Calibration calib;
@@ -156,6 +159,7 @@ int main(int argc, char** argv) {
       if (columns < 1 || columns > 16384) args.fail("--columns must be in [1, 16384]");
       s.columns = columns;
     }
+    s.precision = prec;
     predictor = std::make_unique<stixel::Predictor>(w, s);
     apps::warn_unused_tensors("stixelnext", w, predictor->model().used_tensors(), "StixelNExT++");
     if (!calib_path.empty()) {
@@ -166,10 +170,11 @@ int main(int argc, char** argv) {
       throw std::runtime_error(out_dir + ": cannot create the output folder");
     const auto& st = predictor->settings();
     if (!quiet)
-      std::fprintf(stderr, "stixelnext: head %s, input %dx%d, %d columns of %d px, anchors %s, %s input, kernels %s, %d threads\n",
+      std::fprintf(stderr, "stixelnext: head %s, input %dx%d, %d columns of %d px, anchors %s, %s input, kernels %s (%s), %d threads\n",
                    nn::stixel_head_name(predictor->model().head().variant()), st.input_height, st.input_width,
                    st.effective_columns(), st.stixel_width, stixel::anchor_spec(st.anchors).c_str(),
-                   stixel::normalization_name(st.normalization), nn::isa_name(nn::active_isa()), nn::num_threads());
+                   stixel::normalization_name(st.normalization), nn::isa_name(nn::active_isa()),
+                   nn::precision_name(st.precision), nn::num_threads());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stixelnext: %s\n", e.what());
     return 1;

@@ -19,6 +19,8 @@ namespace {
 
 constexpr int kMlpTile = 64;  // rows of the fused LN -> pw1 -> GELU -> pw2 tile
 
+std::size_t round_up_floats(std::size_t floats) { return (floats + 15) / 16 * 16; }  // 64 bytes
+
 std::string join(const std::vector<int>& v) {
   std::string s = "[";
   for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
@@ -145,8 +147,11 @@ std::vector<weights::TensorSpec> convnext_tensor_specs(const ConvNeXtConfig& cfg
   return specs;
 }
 
-ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
-    : cfg_(convnext_config_from(st, prefix)) {
+ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
+                   Precision precision)
+    : cfg_(convnext_config_from(st, prefix)), precision_(precision) {
+  if (precision_ == Precision::Bf16 && !bf16_gemm_available())
+    throw Error("convnext: precision bf16 needs AVX512_BF16, which this CPU (or NN_ISA) does not offer");
   weights::check_tensors(st, convnext_tensor_specs(cfg_, prefix));
   auto count = [this](std::size_t floats) { weight_bytes_ += floats * sizeof(float); };
 
@@ -190,14 +195,21 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix)
       auto w1 = st.f32(b + "block.3.weight");
       auto b1 = st.f32(b + "block.3.bias");
       fold_affine_in(w1, b1, 4 * c, c, 1, st.f32(b + "block.2.weight"), st.f32(b + "block.2.bias"));
-      blk.pw1 = GemmWeights::pack(w1.data(), 4 * c, c);
       blk.b1 = to_buffer(b1);
       auto w2 = st.f32(b + "block.5.weight");
       auto b2 = st.f32(b + "block.5.bias");
       fold_scale_out(w2, b2, c, 4 * c, st.f32(b + "layer_scale"));
-      blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
       blk.b2 = to_buffer(b2);
-      weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
+      if (precision_ == Precision::Bf16) {
+        // Folded in float first, so bf16 rounds the same weights the float path uses.
+        blk.pw1_bf16 = GemmWeightsBf16::pack(w1.data(), 4 * c, c);
+        blk.pw2_bf16 = GemmWeightsBf16::pack(w2.data(), c, 4 * c);
+        weight_bytes_ += blk.pw1_bf16.bytes() + blk.pw2_bf16.bytes();
+      } else {
+        blk.pw1 = GemmWeights::pack(w1.data(), 4 * c, c);
+        blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
+        weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
+      }
       count(49 * c + c + 4 * c + c);  // dw, dw bias, b1, b2
       stage.blocks.push_back(std::move(blk));
     }
@@ -246,9 +258,9 @@ void ConvNeXt::plan(int n, int h, int w) {
     const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
     const std::size_t c = st.dim;
     if (use_fused_mlp(m, planned_threads_))
-      mlp_scratch = std::max(mlp_scratch, kMlpTile * c * 5);
+      mlp_scratch = std::max(mlp_scratch, mlp_scratch_floats(kMlpTile, st.dim));
     else
-      shared_scratch = std::max(shared_scratch, m * c * 5);
+      shared_scratch = std::max(shared_scratch, mlp_scratch_floats(m, st.dim));
     for (std::size_t i = 0; i < st.blocks.size(); ++i) {
       Block& b = st.blocks[i];
       const std::string name = "features." + std::to_string(2 * si + 1) + "." + std::to_string(i);
@@ -258,7 +270,7 @@ void ConvNeXt::plan(int n, int h, int w) {
   }
   out_shape_ = s;
   mlp_tile_ = mlp_scratch;
-  scratch_per_thread_ = std::max(conv_scratch_, mlp_scratch);
+  scratch_per_thread_ = round_up_floats(std::max(conv_scratch_, mlp_scratch));  // 64-byte aligned shares
   act_a_.resize(act);
   act_b_.resize(act);
   scratch_.resize(std::max(scratch_per_thread_ * planned_threads_, shared_scratch));
@@ -352,21 +364,71 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
   }
 }
 
-void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln,
-                            float* hid) {
+namespace {
+
+// bf16 row stride for c channels: K pairs must be complete.
+std::size_t bf16_stride(int c) { return static_cast<std::size_t>(c) + (c & 1); }
+
+// Rows of a float matrix to bf16, split over the team by rows (the bits do not depend on
+// the split).
+void convert_rows_parallel(std::size_t rows, int cols, const float* src, bf16* dst,
+                           std::size_t ldd) {
+  const std::size_t chunk = 16;
+  const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>((rows + chunk - 1) / chunk);
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static)
+#endif
+  for (std::ptrdiff_t i = 0; i < chunks; ++i) {
+    const std::size_t r0 = static_cast<std::size_t>(i) * chunk, r1 = std::min(rows, r0 + chunk);
+    convert_to_bf16(static_cast<int>(r1 - r0), cols, src + r0 * cols, cols, dst + r0 * ldd,
+                    static_cast<std::ptrdiff_t>(ldd));
+  }
+}
+
+}  // namespace
+
+std::size_t ConvNeXt::mlp_scratch_floats(std::size_t rows, int c) const {
+  std::size_t floats = round_up_floats(rows * c) + round_up_floats(rows * 4 * c);
+  if (precision_ == Precision::Bf16)
+    floats += round_up_floats((rows * bf16_stride(c) + 1) / 2) + round_up_floats(rows * 2 * c);
+  return floats;
+}
+
+ConvNeXt::MlpScratch ConvNeXt::mlp_scratch(float* base, std::size_t rows, int c) const {
+  MlpScratch s{};
+  s.ln = base;
+  s.hid = s.ln + round_up_floats(rows * c);
+  if (precision_ == Precision::Bf16) {
+    float* lnh = s.hid + round_up_floats(rows * 4 * c);
+    s.ln_bf16 = reinterpret_cast<bf16*>(lnh);
+    s.hid_bf16 = reinterpret_cast<bf16*>(lnh + round_up_floats((rows * bf16_stride(c) + 1) / 2));
+  }
+  return s;
+}
+
+void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1,
+                            const MlpScratch& sc) {
   float* x = act_a_.data() + m0 * c;
   const float* t = act_b_.data() + m0 * c;
   const int rows = static_cast<int>(m1 - m0);
-  layernorm(rows, c, t, c, ln, c, nullptr, nullptr, cfg_.eps);
+  layernorm(rows, c, t, c, sc.ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
-  gemm(rows, ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
   e2.residual = x;
   e2.ldr = c;
-  gemm(rows, hid, 4 * c, b.pw2, x, c, e2);
+  if (precision_ == Precision::Bf16) {
+    const std::ptrdiff_t ldl = static_cast<std::ptrdiff_t>(bf16_stride(c));
+    convert_to_bf16(rows, c, sc.ln, c, sc.ln_bf16, ldl);
+    gemm_bf16(rows, sc.ln_bf16, ldl, b.pw1_bf16, sc.hid, 4 * c, e1);
+    convert_to_bf16(rows, 4 * c, sc.hid, 4 * c, sc.hid_bf16, 4 * c);
+    gemm_bf16(rows, sc.hid_bf16, 4 * c, b.pw2_bf16, x, c, e2);
+    return;
+  }
+  gemm(rows, sc.ln, c, b.pw1, sc.hid, 4 * c, e1);
+  gemm(rows, sc.hid, 4 * c, b.pw2, x, c, e2);
 }
 
 void ConvNeXt::run_block(const Block& b, Shape s) {
@@ -393,25 +455,32 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
       const std::size_t groups = (m + 7) / 8;
       const std::size_t r0 = std::min(m, groups * id / team * 8);
       const std::size_t r1 = std::min(m, groups * (id + 1) / team * 8);
-      float* ln = scratch_.data() + scratch_per_thread_ * id;
-      float* hid = ln + static_cast<std::size_t>(kMlpTile) * c;
+      const MlpScratch sc = mlp_scratch(scratch_.data() + scratch_per_thread_ * id, kMlpTile, c);
       for (std::size_t m0 = r0; m0 < r1; m0 += kMlpTile)
-        run_mlp_rows(b, c, m0, std::min(r1, m0 + kMlpTile), ln, hid);
+        run_mlp_rows(b, c, m0, std::min(r1, m0 + kMlpTile), sc);
     }
     return;
   }
-  float* ln = scratch_.data();
-  float* hid = ln + m * c;
-  layernorm_parallel(m, c, act_b_.data(), c, ln, c, nullptr, nullptr, cfg_.eps);
+  const MlpScratch sc = mlp_scratch(scratch_.data(), m, c);
+  layernorm_parallel(m, c, act_b_.data(), c, sc.ln, c, nullptr, nullptr, cfg_.eps);
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
-  gemm_parallel(static_cast<int>(m), ln, c, b.pw1, hid, 4 * c, e1);
   GemmEpilogue e2;
   e2.bias = b.b2.data();
   e2.residual = act_a_.data();
   e2.ldr = c;
-  gemm_parallel(static_cast<int>(m), hid, 4 * c, b.pw2, act_a_.data(), c, e2);
+  const int rows = static_cast<int>(m);
+  if (precision_ == Precision::Bf16) {
+    const std::size_t ldl = bf16_stride(c);
+    convert_rows_parallel(m, c, sc.ln, sc.ln_bf16, ldl);
+    gemm_bf16_parallel(rows, sc.ln_bf16, static_cast<std::ptrdiff_t>(ldl), b.pw1_bf16, sc.hid, 4 * c, e1);
+    convert_rows_parallel(m, 4 * c, sc.hid, sc.hid_bf16, 4 * static_cast<std::size_t>(c));
+    gemm_bf16_parallel(rows, sc.hid_bf16, 4 * c, b.pw2_bf16, act_a_.data(), c, e2);
+    return;
+  }
+  gemm_parallel(rows, sc.ln, c, b.pw1, sc.hid, 4 * c, e1);
+  gemm_parallel(rows, sc.hid, 4 * c, b.pw2, act_a_.data(), c, e2);
 }
 
 ConstTensorView ConvNeXt::forward(const float* input_nchw) {

@@ -16,6 +16,8 @@
 #include "nn/conv2d.h"
 #include "nn/dwconv.h"
 #include "nn/gemm.h"
+#include "nn/gemm_bf16.h"
+#include "nn/precision.h"
 #include "nn/profiler.h"
 #include "nn/tensor.h"
 #include "weights/safetensors.h"
@@ -47,10 +49,14 @@ class ConvNeXt {
  public:
   // Checks every expected tensor (first problem reported by name) and repacks the
   // weights for the active ISA. The SafeTensors object may be freed afterwards.
-  ConvNeXt(const weights::SafeTensors& st, const std::string& prefix = "features.");
+  // Precision::Bf16 runs the MLP GEMMs (90 % of the work) in bfloat16; it throws
+  // nn::Error when the CPU (or NN_ISA) has no AVX512_BF16.
+  ConvNeXt(const weights::SafeTensors& st, const std::string& prefix = "features.",
+           Precision precision = Precision::F32);
 
   const ConvNeXtConfig& config() const { return cfg_; }
   int out_channels() const { return cfg_.dims.back(); }
+  Precision precision() const { return precision_; }
 
   // Plans the activation arena for NCHW inputs [n, 3, h, w] and the current thread
   // count. Throws nn::Error for h or w below 32 or n below 1.
@@ -74,7 +80,8 @@ class ConvNeXt {
   struct Block {
     DwConvWeights dw;
     AlignedBuffer b1, b2;
-    GemmWeights pw1, pw2;
+    GemmWeights pw1, pw2;          // Precision::F32
+    GemmWeightsBf16 pw1_bf16, pw2_bf16;  // Precision::Bf16 (the other pair stays empty)
     int prof_dw = -1, prof_mlp = -1;
   };
   struct Stage {
@@ -90,9 +97,20 @@ class ConvNeXt {
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
   void run_block(const Block& b, Shape s);
-  void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, float* ln, float* hid);
+  // Scratch of one MLP tile (or of all rows on the unfused path): the normalised rows,
+  // the hidden rows and, for bf16, both again in bfloat16.
+  struct MlpScratch {
+    float* ln;
+    float* hid;
+    bf16* ln_bf16;
+    bf16* hid_bf16;
+  };
+  std::size_t mlp_scratch_floats(std::size_t rows, int c) const;
+  MlpScratch mlp_scratch(float* base, std::size_t rows, int c) const;
+  void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, const MlpScratch& s);
 
   ConvNeXtConfig cfg_;
+  Precision precision_ = Precision::F32;
   // The stem's GEMM reads patches straight from the NCHW input, so its K order is
   // PyTorch's (c, ky, kx) and W packs without reordering.
   GemmWeights stem_w_;

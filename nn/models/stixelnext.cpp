@@ -13,8 +13,9 @@ StixelHeadVariant choose_head(const weights::SafeTensors& st, std::optional<Stix
 
 }  // namespace
 
-StixelNExT::StixelNExT(const weights::SafeTensors& st, std::optional<StixelHeadVariant> force)
-    : backbone_(st, "features."),
+StixelNExT::StixelNExT(const weights::SafeTensors& st, std::optional<StixelHeadVariant> force,
+                       Precision precision)
+    : backbone_(st, "features.", precision),
       head_(st, "classifier.", choose_head(st, force, backbone_.out_channels()), backbone_.out_channels()) {}
 
 std::vector<std::string> StixelNExT::used_tensors() const {

@@ -16,7 +16,9 @@ class StixelNExT {
  public:
   // Weights use the PyTorch state_dict names `features.*` and `classifier.*`. The head
   // variant is detected from them unless `force` names one (V1 and V3 look alike).
-  explicit StixelNExT(const weights::SafeTensors& st, std::optional<StixelHeadVariant> force = std::nullopt);
+  // `precision` applies to the backbone's MLP GEMMs (see ConvNeXt).
+  explicit StixelNExT(const weights::SafeTensors& st, std::optional<StixelHeadVariant> force = std::nullopt,
+                      Precision precision = Precision::F32);
 
   const ConvNeXt& backbone() const { return backbone_; }
   const StixelHead& head() const { return head_; }

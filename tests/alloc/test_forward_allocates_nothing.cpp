@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "nn/gemm_bf16.h"
 #include "nn/models/convnext.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
@@ -64,6 +65,21 @@ TEST(NoAllocation, ConvNeXtForward) {
     EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << threads << " threads";
     model.profiler().set_enabled(true);
     EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << "profiling, " << threads << " threads";
+  }
+  nn::set_num_threads(0);
+}
+
+TEST(NoAllocation, ConvNeXtForwardBf16) {
+  if (!nn::bf16_gemm_available()) GTEST_SKIP() << "this CPU has no AVX512_BF16";
+  auto st = weights::SafeTensors::from_bytes(
+      nn::synthetic_weights(nn::convnext_tensor_specs(small(), "features."), 1).bytes(), "synthetic");
+  for (int threads : {1, 2}) {
+    nn::set_num_threads(threads);
+    nn::ConvNeXt model(st, "features.", nn::Precision::Bf16);
+    model.plan(2, 96, 128);
+    std::vector<float> x(2 * 3 * 96 * 128, 0.5f);
+    model.forward(x.data());
+    EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << threads << " threads";
   }
   nn::set_num_threads(0);
 }

@@ -10,10 +10,15 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <vector>
 
+#include "nn/gemm_bf16.h"
+#include "nn/layout.h"
 #include "nn/models/convnext.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/synthetic_weights.h"
+#include "nn/threads.h"
 #include "weights/safetensors.h"
 
 namespace {
@@ -126,6 +131,45 @@ TEST_F(NnrunCli, SameOutputForOneAndTwoThreads) {
   auto b = weights::SafeTensors::load(path("y.safetensors")).f32("features");
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+}
+
+// --precision bf16 is the library's bf16 model, bitwise, and says so on stderr.
+TEST_F(NnrunCli, PrecisionBf16IsTheLibrarysBf16Model) {
+  if (!nn::bf16_gemm_available()) GTEST_SKIP() << "this CPU has no AVX512_BF16";
+  Result r = run("w.safetensors", "x.safetensors", "--precision bf16");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("bf16"), std::string::npos) << r.err;
+  auto y = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+  auto w = weights::SafeTensors::load(path("w.safetensors"));
+  nn::set_num_threads(2);
+  nn::ConvNeXt model(w, "features.", nn::Precision::Bf16);
+  model.plan(1, 64, 96);
+  std::vector<float> x(3 * 64 * 96, 0.5f);
+  nn::ConstTensorView v = model.forward(x.data());
+  nn::set_num_threads(0);
+  std::vector<float> nchw(v.count());
+  nn::nhwc_to_nchw(v.data, v.shape.n, v.shape.c, v.shape.h, v.shape.w, nchw.data());
+  ASSERT_EQ(y.size(), nchw.size());
+  EXPECT_EQ(0, std::memcmp(y.data(), nchw.data(), y.size() * sizeof(float)));
+  ASSERT_EQ(run("w.safetensors", "x.safetensors").code, 0);
+  auto f32 = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+  EXPECT_NE(0, std::memcmp(y.data(), f32.data(), y.size() * sizeof(float))) << "bf16 gave f32's bits";
+}
+
+// Usage errors (exit 2, the problem on the first line, no output): an unknown precision, bf16 for a detector,
+// bf16 with the kernels forced below AVX-512.
+TEST_F(NnrunCli, PrecisionUsageErrors) {
+  for (const auto& [extra, model, problem] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"--precision fp8", "convnext", "--precision must be f32 or bf16"},
+           {"--precision bf16 --isa avx2", "convnext", "needs AVX512_BF16"},
+           {"--precision bf16", "fasterrcnn_resnet50_fpn", "runs in f32 only"}}) {
+    if (problem == "runs in f32 only" && !nn::bf16_gemm_available()) continue;  // fails earlier, differently
+    Result r = run("w.safetensors", "x.safetensors", extra, model);
+    EXPECT_EQ(r.code, 2) << extra << ": " << r.err;
+    EXPECT_NE(r.err.find(problem), std::string::npos) << extra << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("nnrun: ", 0), 0u) << r.err;
+    EXPECT_FALSE(output_exists()) << extra;
+  }
 }
 
 TEST_F(NnrunCli, TruncatedFile) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "apps/common/image_io.h"
+#include "nn/gemm_bf16.h"
 #include "nn/models/convnext.h"
 #include "nn/models/stixel_head.h"
 #include "nn/models/synthetic_weights.h"
@@ -142,6 +143,22 @@ TEST_F(StixelnextCli, ThresholdOutsideUnitInterval) {
   EXPECT_EQ(run("--weights " + path("w.safetensors") + " --threshold 1.5 " + path("img.png")), 2);
   EXPECT_NE(err_.find("--threshold"), std::string::npos) << err_;
   EXPECT_EQ(run("--weights " + path("w.safetensors") + " --threshold -0.1 " + path("img.png")), 2);
+}
+
+// --precision bf16 runs (different stixel probabilities, same layout); a bad value is a
+// usage error.
+TEST_F(StixelnextCli, PrecisionOption) {
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --precision half " + path("img.png")), 2);
+  EXPECT_NE(err_.find("--precision must be f32 or bf16"), std::string::npos) << err_;
+  EXPECT_FALSE(exists("out/img.stx1"));
+  if (!nn::bf16_gemm_available()) GTEST_SKIP() << "this CPU has no AVX512_BF16";
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --threshold 0 --format csv " + path("img.png")), 0) << err_;
+  const std::string f32 = slurp(path("out/img.csv"));
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --threshold 0 --format csv --precision bf16 " +
+                path("img.png")), 0) << err_;
+  const std::string bf16 = slurp(path("out/img.csv"));
+  EXPECT_EQ(std::count(f32.begin(), f32.end(), '\n'), std::count(bf16.begin(), bf16.end(), '\n'));
+  EXPECT_NE(f32, bf16);
 }
 
 TEST_F(StixelnextCli, ClusterNeedsCalibration) {
