@@ -4,7 +4,10 @@
 //   gemm_tile64/<shape>/<kernel>/threads:T   gemm() on 64-row tiles whose A and C stay in
 //     cache, as the model's fused LN -> pw1 -> GELU -> pw2 loop calls it (T threads each
 //     run their own tiles)
-// pct_peak is relative to the FMA peak of the kernel's own ISA (bench/peak.h).
+// pct_peak is relative to the FMA peak of the kernel's own ISA (bench/peak.h). With
+// AVX512_BF16 the tile benchmark also runs the bf16 GEMM (kernel gemm_bf16_8x48_avx512bf16,
+// A already in bf16 as the model's tiles hand it over); its pct_peak is against the FP32
+// peak, so up to 200 %.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -15,6 +18,7 @@
 #include "bench/peak.h"
 #include "nn/buffer.h"
 #include "nn/gemm.h"
+#include "nn/gemm_bf16.h"
 #include "nn/gemm_kernels.h"
 #include "nn/threads.h"
 
@@ -62,15 +66,21 @@ void fill(float* p, std::size_t n, unsigned salt) {
   }
 }
 
+constexpr int kBf16 = -1;  // "ukernel" of the bf16 GEMM
+
 struct Problem {
   nn::GemmWeights w;
+  nn::GemmWeightsBf16 wb;
   nn::AlignedBuffer bias, scale;
   Problem(const GemmShape& s, int ukernel) : bias(s.n), scale(s.n) {
     nn::AlignedBuffer wt(static_cast<std::size_t>(s.n) * s.k);
     fill(wt.data(), wt.size(), 1);
     // ~unit-variance sums, so GELU sees its whole interesting range.
     for (std::size_t i = 0; i < wt.size(); ++i) wt[i] *= 1.7f / std::sqrt(static_cast<float>(s.k));
-    w = nn::GemmWeights::pack_for_ukernel(wt.data(), s.n, s.k, ukernel);
+    if (ukernel == kBf16)
+      wb = nn::GemmWeightsBf16::pack(wt.data(), s.n, s.k);
+    else
+      w = nn::GemmWeights::pack_for_ukernel(wt.data(), s.n, s.k, ukernel);
     fill(bias.data(), bias.size(), 2);
     fill(scale.data(), scale.size(), 3);
     for (std::size_t i = 0; i < scale.size(); ++i) scale[i] *= 1e-3f;  // layer scale ~ 1e-6..1
@@ -115,7 +125,7 @@ void bm_full(benchmark::State& state, GemmShape s, int ukernel, int threads) {
 }
 
 void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
-  IsaOverride isa(nn::gemm_ukernel(ukernel).isa);
+  IsaOverride isa(ukernel == kBf16 ? nn::Isa::Avx512 : nn::gemm_ukernel(ukernel).isa);
   const Problem p(s, ukernel);
   // Per thread: one 64-row A tile and C tile, reused (hot in cache as in the fused loop).
   const std::size_t a_floats = static_cast<std::size_t>(kTileRows) * s.k;
@@ -123,6 +133,8 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
   nn::AlignedBuffer a(a_floats * threads), c(c_floats * threads);
   fill(a.data(), a.size(), 6);
   fill(c.data(), c.size(), 7);
+  std::vector<nn::bf16> ab(a.size());  // every ConvNeXt K is even: no pad needed
+  if (ukernel == kBf16) nn::convert_to_bf16(kTileRows * threads, s.k, a.data(), s.k, ab.data(), s.k);
   for (auto _ : state) {
 #ifdef ROADNN_OPENMP
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -131,7 +143,12 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
       const float* at = a.data() + a_floats * t;
       float* ct = c.data() + c_floats * t;
       const nn::GemmEpilogue ep = p.epilogue(s, ct, s.n);
-      for (int i = 0; i < kTilesPerIteration; ++i) nn::gemm(kTileRows, at, s.k, p.w, ct, s.n, ep);
+      if (ukernel == kBf16) {
+        const nn::bf16* abt = ab.data() + a_floats * t;
+        for (int i = 0; i < kTilesPerIteration; ++i) nn::gemm_bf16(kTileRows, abt, s.k, p.wb, ct, s.n, ep);
+      } else {
+        for (int i = 0; i < kTilesPerIteration; ++i) nn::gemm(kTileRows, at, s.k, p.w, ct, s.n, ep);
+      }
     }
     benchmark::ClobberMemory();
   }
@@ -155,6 +172,14 @@ int register_all() {
             ->Unit(benchmark::kMicrosecond);
       }
   }
+  if (nn::bf16_gemm_available())
+    for (const GemmShape& s : kShapes)
+      for (int threads : {1, 2})
+        benchmark::RegisterBenchmark(("gemm_tile64/" + std::string(s.name) + "/" + nn::gemm_bf16_kernel_name() +
+                                      "/threads:" + std::to_string(threads)).c_str(),
+                                     bm_tiles, s, kBf16, threads)
+            ->UseRealTime()
+            ->Unit(benchmark::kMicrosecond);
   return 0;
 }
 
