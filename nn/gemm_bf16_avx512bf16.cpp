@@ -52,10 +52,10 @@ void gemm_bf16_8x48_avx512bf16(const GemmTile& tile) {
 }
 
 void convert_to_bf16_avx512bf16(int rows, int cols, const float* src, std::ptrdiff_t lds,
-                                bf16* dst, std::ptrdiff_t ldd) {
+                                std::uint16_t* dst, std::ptrdiff_t ldd) {
   for (int r = 0; r < rows; ++r) {
     const float* s = src + r * lds;
-    bf16* d = dst + r * ldd;
+    std::uint16_t* d = dst + r * ldd;
     int j = 0;
     for (; j + 16 <= cols; j += 16)
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(d + j),

@@ -1,10 +1,11 @@
 // Internal to the bf16 GEMM: its micro-kernel and conversion, defined in the AVX512_BF16
-// file (cmake/isa.cmake). Declarations and constants only.
+// file (cmake/isa.cmake). Declarations and constants only: the ISA file must not see
+// nn/gemm_bf16.h's classes (their inline members would be compiled with AVX-512 flags).
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
-#include "nn/gemm_bf16.h"
 #include "nn/gemm_kernels.h"
 
 namespace nn {
@@ -14,7 +15,8 @@ namespace nn {
 constexpr int kGemmBf16Mr = 8, kGemmBf16Nr = 48;
 void gemm_bf16_8x48_avx512bf16(const GemmTile& tile);
 
+// nn::convert_to_bf16 (dst holds bfloat16 bits).
 void convert_to_bf16_avx512bf16(int rows, int cols, const float* src, std::ptrdiff_t lds,
-                                bf16* dst, std::ptrdiff_t ldd);
+                                std::uint16_t* dst, std::ptrdiff_t ldd);
 
 }  // namespace nn
