@@ -12,37 +12,33 @@ namespace {
 
 #define NN_UNROLL _Pragma("GCC unroll 16")
 
-template <int R, int NV>
-void tile_kernel(const GemmTile& t) {
-  constexpr int NR = 16 * NV;
-  // Every loop over acc is unrolled completely (NN_UNROLL): GCC keeps acc[][] in registers
-  // only when all its indices are constants.
-  __m512 acc[R][NV];
-  load_tile(acc, t);
-  const float* arow[R];
-  NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
-  const float* w = t.w;
-  const char* pf = reinterpret_cast<const char*>(t.pf);
-  const int pf_lines = t.pf_lines;
-  for (int k = 0; k < t.kc; ++k) {
-    if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
-    __m512 wv[NV];
-    NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = _mm512_load_ps(w + 16 * v);
-    w += NR;
-    NN_UNROLL for (int r = 0; r < R; ++r) {
-      const __m512 b = _mm512_set1_ps(arow[r][k]);
-      NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_fmadd_ps(b, wv[v], acc[r][v]);
+// One tile: R rows of A broadcast against NV zmm columns of the panel (see the top).
+struct Tile {
+  template <int R, int NV>
+  static void run(const GemmTile& t) {
+    constexpr int NR = 16 * NV;
+    // Every loop over acc is unrolled completely (NN_UNROLL): GCC keeps acc[][] in registers
+    // only when all its indices are constants.
+    __m512 acc[R][NV];
+    load_tile(acc, t);
+    const float* arow[R];
+    NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
+    const float* w = t.w;
+    const char* pf = reinterpret_cast<const char*>(t.pf);
+    const int pf_lines = t.pf_lines;
+    for (int k = 0; k < t.kc; ++k) {
+      if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
+      __m512 wv[NV];
+      NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = _mm512_load_ps(w + 16 * v);
+      w += NR;
+      NN_UNROLL for (int r = 0; r < R; ++r) {
+        const __m512 b = _mm512_set1_ps(arow[r][k]);
+        NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_fmadd_ps(b, wv[v], acc[r][v]);
+      }
     }
+    store_tile(acc, t);
   }
-  store_tile(acc, t);
-}
-
-// Picks the instantiation for the tile's row count (1..MR).
-template <int R, int NV>
-void dispatch_rows(const GemmTile& t) {
-  if (t.mr == R) return tile_kernel<R, NV>(t);
-  if constexpr (R > 1) dispatch_rows<R - 1, NV>(t);
-}
+};
 
 }  // namespace
 
@@ -50,7 +46,7 @@ void dispatch_rows(const GemmTile& t) {
 
 #define NN_GEMM_DEFINE_Avx512(fn, mr, nr) \
   static_assert((nr) % 16 == 0, #fn ": NR must be a multiple of 16"); \
-  void fn(const GemmTile& tile) { dispatch_rows<mr, (nr) / 16>(tile); }
+  void fn(const GemmTile& tile) { dispatch_rows<Tile, mr, (nr) / 16>(tile); }
 #define NN_GEMM_DEFINE_Avx2(fn, mr, nr)
 #define NN_GEMM_DEFINE_Scalar(fn, mr, nr)
 #define NN_GEMM_DEFINE(fn, isa, mr, nr) NN_GEMM_DEFINE_##isa(fn, mr, nr)

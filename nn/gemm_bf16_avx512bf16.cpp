@@ -11,44 +11,41 @@
 namespace nn {
 namespace {
 
-template <int R, int NV>
-void tile_kernel(const GemmTile& t) {
-  constexpr int NR = 16 * NV;
-  __m512 acc[R][NV];  // all loops unrolled: acc stays in registers (see gemm_avx512.cpp)
-  load_tile(acc, t);
-  const char* arow[R];
-  _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r)
-    arow[r] = reinterpret_cast<const char*>(t.a + r * t.lda);
-  const float* w = t.w;
-  const char* pf = reinterpret_cast<const char*>(t.pf);
-  const int pf_lines = t.pf_lines;
-  for (int k = 0; k < t.kc; ++k) {  // k counts pairs
-    if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
-    __m512bh wv[NV];
-    _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v)
-      wv[v] = (__m512bh)_mm512_load_si512(w + 16 * v);
-    w += NR;
-    _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r) {
-      std::int32_t pair;
-      std::memcpy(&pair, arow[r] + 4 * k, 4);
-      const __m512bh b = (__m512bh)_mm512_set1_epi32(pair);
+// One tile: R rows of A's K pairs broadcast against NV zmm columns of the pair panel.
+struct Tile {
+  template <int R, int NV>
+  static void run(const GemmTile& t) {
+    constexpr int NR = 16 * NV;
+    __m512 acc[R][NV];  // all loops unrolled: acc stays in registers (see gemm_avx512.cpp)
+    load_tile(acc, t);
+    const char* arow[R];
+    _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r)
+      arow[r] = reinterpret_cast<const char*>(t.a + r * t.lda);
+    const float* w = t.w;
+    const char* pf = reinterpret_cast<const char*>(t.pf);
+    const int pf_lines = t.pf_lines;
+    for (int k = 0; k < t.kc; ++k) {  // k counts pairs
+      if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
+      __m512bh wv[NV];
       _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v)
-        acc[r][v] = _mm512_dpbf16_ps(acc[r][v], b, wv[v]);
+        wv[v] = (__m512bh)_mm512_load_si512(w + 16 * v);
+      w += NR;
+      _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r) {
+        std::int32_t pair;
+        std::memcpy(&pair, arow[r] + 4 * k, 4);
+        const __m512bh b = (__m512bh)_mm512_set1_epi32(pair);
+        _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v)
+          acc[r][v] = _mm512_dpbf16_ps(acc[r][v], b, wv[v]);
+      }
     }
+    store_tile(acc, t);
   }
-  store_tile(acc, t);
-}
-
-template <int R, int NV>
-void dispatch_rows(const GemmTile& t) {
-  if (t.mr == R) return tile_kernel<R, NV>(t);
-  if constexpr (R > 1) dispatch_rows<R - 1, NV>(t);
-}
+};
 
 }  // namespace
 
 void gemm_bf16_8x48_avx512bf16(const GemmTile& tile) {
-  dispatch_rows<kGemmBf16Mr, kGemmBf16Nr / 16>(tile);
+  dispatch_rows<Tile, kGemmBf16Mr, kGemmBf16Nr / 16>(tile);
 }
 
 void convert_to_bf16_avx512bf16(int rows, int cols, const float* src, std::ptrdiff_t lds,

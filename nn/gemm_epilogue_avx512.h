@@ -1,5 +1,5 @@
-// The start and end of an AVX-512 micro-kernel tile: loading the accumulators and the
-// float epilogue of nn/gemm.h applied straight from them, shared by the float GEMM and
+// The frame of an AVX-512 micro-kernel tile: the dispatch on its row count, loading the
+// accumulators and the float epilogue of nn/gemm.h applied straight from them, shared by the float GEMM and
 // the bf16 GEMM (so both finish every element with the same instructions). Include only from AVX-512 ISA files (cmake/isa.cmake): every
 // helper here is internal to the including file.
 #pragma once
@@ -69,6 +69,14 @@ __attribute__((always_inline)) inline void store_tile(__m512 (&acc)[R][NV], cons
     case Act::HardSigmoid: return store_epilogue<Act::HardSigmoid>(acc, t);
     case Act::Sigmoid: return store_epilogue<Act::Sigmoid>(acc, t);
   }
+}
+
+// Runs Kernel::run<R, NV>(t) for the tile's row count R = t.mr (1..MR): the row tails are
+// their own instantiations, so every accumulator index stays a constant.
+template <class Kernel, int R, int NV>
+void dispatch_rows(const GemmTile& t) {
+  if (t.mr == R) return Kernel::template run<R, NV>(t);
+  if constexpr (R > 1) dispatch_rows<Kernel, R - 1, NV>(t);
 }
 
 }  // namespace

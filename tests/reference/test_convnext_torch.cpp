@@ -27,10 +27,23 @@ std::vector<float> run(nn::ConvNeXt& model, const std::vector<float>& x,
   return nchw;
 }
 
-void check_case(const std::string& weights_file, const std::string& case_name) {
+// --precision bf16: the MLP GEMMs round their operands to bfloat16 (8 significant bits), so
+// the features move by 0.3-0.7 % of their range on these cases (printed by the tests;
+// docs/PERFORMANCE.md). The bound leaves about 3x room and still catches a wrong pairing or
+// a lost epilogue, which move them by 10-100 %.
+constexpr double kBf16RelTol = 2e-2;
+
+// A CPU without AVX512_BF16 cannot run the bf16 cases (a reported skip, not a missing install).
+#define SKIP_WITHOUT_BF16(precision)                                            \
+  if ((precision) == nn::Precision::Bf16 && !nn::bf16_gemm_available())         \
+  GTEST_SKIP() << "this CPU has no AVX512_BF16 (or NN_ISA is below avx512)"
+
+void check_case(const std::string& weights_file, const std::string& case_name,
+                nn::Precision precision = nn::Precision::F32) {
+  SKIP_WITHOUT_BF16(precision);
   weights::SafeTensors w = reftest::load_ref(weights_file);
   weights::SafeTensors c = reftest::load_ref("convnext_case_" + case_name + ".safetensors");
-  nn::ConvNeXt model(w);
+  nn::ConvNeXt model(w, "features.", precision);
   const auto x = c.f32("input");
   const auto expected = c.f32("expected");
   const auto& eshape = c.info("expected").shape;
@@ -38,7 +51,12 @@ void check_case(const std::string& weights_file, const std::string& case_name) {
   const nn::Shape s = model.output_shape();
   ASSERT_EQ(eshape, (std::vector<std::int64_t>{s.n, s.c, s.h, s.w}));
   ASSERT_EQ(y.size(), expected.size());
-  reftest::expect_close_rel_max(y.data(), expected, kRelTol, case_name);
+  if (precision == nn::Precision::F32) return reftest::expect_close_rel_max(y.data(), expected, kRelTol, case_name);
+  reftest::expect_close_rel_max(y.data(), expected, kBf16RelTol, case_name + " bf16");
+  // The bf16 path really ran: f32 rounding alone stays within kRelTol.
+  const reftest::Diff d = reftest::diff(y.data(), expected);
+  std::printf("%s bf16: max |ours - torch| / max |torch| = %.3g\n", case_name.c_str(), d.max_abs / d.max_ref);
+  EXPECT_GT(d.max_abs, kRelTol * d.max_ref) << case_name << ": bf16 output as exact as f32's";
 }
 
 TEST(ConvNeXtTorch, Tiny224) { check_case("convnext_tiny_weights.safetensors", "tiny_224"); }
@@ -57,12 +75,14 @@ TEST(ConvNeXtTorch, ConfigReadFromWeights) {
 }
 
 // Bitwise the same output for 1 and 2 threads, on every ISA path.
-void expect_deterministic(const std::string& weights_file, const std::string& case_name) {
+void expect_deterministic(const std::string& weights_file, const std::string& case_name,
+                          nn::Precision precision = nn::Precision::F32) {
+  SKIP_WITHOUT_BF16(precision);
   SCOPED_TRACE(case_name);
   weights::SafeTensors w = reftest::load_ref(weights_file);
   weights::SafeTensors c = reftest::load_ref("convnext_case_" + case_name + ".safetensors");
   const auto x = c.f32("input");
-  nn::ConvNeXt model(w);
+  nn::ConvNeXt model(w, "features.", precision);
   nn::set_num_threads(1);
   std::vector<float> one = run(model, x, c.info("input").shape);
   nn::set_num_threads(2);
@@ -79,6 +99,10 @@ TEST(ConvNeXtTorch, DeterministicAcrossThreadCounts) {
   // 224x224 takes all three MLP paths with 2 threads (64-row tiles, one tile per thread in
   // stage 3, column-split GEMMs in stage 4) and only 64-row tiles with 1.
   expect_deterministic("convnext_tiny_weights.safetensors", "tiny_224");
+}
+
+TEST(ConvNeXtTorchBf16, DeterministicAcrossThreadCounts) {
+  expect_deterministic("convnext_tiny_weights.safetensors", "tiny_224", nn::Precision::Bf16);
 }
 
 // The scalar and AVX2 paths (for CPUs without AVX-512) match PyTorch too.
@@ -98,53 +122,20 @@ TEST(ConvNeXtTorch, EveryIsaMatchesTorch) {
   nn::set_isa(saved);
 }
 
-// --precision bf16: the MLP GEMMs round their operands to bfloat16 (8 significant bits), so
-// the features move by 0.3-0.7 % of their range on these cases (printed by the tests;
-// docs/PERFORMANCE.md). The bound leaves about 3x room and still catches a wrong pairing or
-// a lost epilogue, which move them by 10-100 %.
-constexpr double kBf16RelTol = 2e-2;
-
-// A CPU without AVX512_BF16 cannot run these (a reported skip, not a missing install).
-#define REQUIRE_BF16()                 \
-  if (!nn::bf16_gemm_available())      \
-  GTEST_SKIP() << "this CPU has no AVX512_BF16 (or NN_ISA is below avx512)"
-
-void check_case_bf16(const std::string& weights_file, const std::string& case_name) {
-  REQUIRE_BF16();
-  weights::SafeTensors w = reftest::load_ref(weights_file);
-  weights::SafeTensors c = reftest::load_ref("convnext_case_" + case_name + ".safetensors");
-  nn::ConvNeXt model(w, "features.", nn::Precision::Bf16);
-  const auto x = c.f32("input");
-  const auto expected = c.f32("expected");
-  std::vector<float> y = run(model, x, c.info("input").shape);
-  ASSERT_EQ(y.size(), expected.size());
-  reftest::expect_close_rel_max(y.data(), expected, kBf16RelTol, case_name + " bf16");
-  // The bf16 path really ran: f32 rounding alone stays within kRelTol.
-  const reftest::Diff d = reftest::diff(y.data(), expected);
-  std::printf("%s bf16: max |ours - torch| / max |torch| = %.3g\n", case_name.c_str(), d.max_abs / d.max_ref);
-  EXPECT_GT(d.max_abs, kRelTol * d.max_ref) << case_name << ": bf16 output as exact as f32's";
+TEST(ConvNeXtTorchBf16, Tiny224) {
+  check_case("convnext_tiny_weights.safetensors", "tiny_224", nn::Precision::Bf16);
 }
-
-TEST(ConvNeXtTorchBf16, Tiny224) { check_case_bf16("convnext_tiny_weights.safetensors", "tiny_224"); }
-TEST(ConvNeXtTorchBf16, TinyOddSize200x328) { check_case_bf16("convnext_tiny_weights.safetensors", "tiny_odd"); }
-TEST(ConvNeXtTorchBf16, TinyBatch2) { check_case_bf16("convnext_tiny_weights.safetensors", "tiny_batch2"); }
-TEST(ConvNeXtTorchBf16, TinyFullHd1280x1920) { check_case_bf16("convnext_tiny_weights.safetensors", "tiny_fullhd"); }
-TEST(ConvNeXtTorchBf16, OddWidthConfig) { check_case_bf16("convnext_small_cfg_weights.safetensors", "odd_cfg"); }
-
-// 224x224 runs both MLP paths (fused tiles in stages 1-2, column-split GEMMs in 3-4).
-TEST(ConvNeXtTorchBf16, DeterministicAcrossThreadCounts) {
-  REQUIRE_BF16();
-  weights::SafeTensors w = reftest::load_ref("convnext_tiny_weights.safetensors");
-  weights::SafeTensors c = reftest::load_ref("convnext_case_tiny_224.safetensors");
-  const auto x = c.f32("input");
-  nn::ConvNeXt model(w, "features.", nn::Precision::Bf16);
-  nn::set_num_threads(1);
-  std::vector<float> one = run(model, x, c.info("input").shape);
-  nn::set_num_threads(2);
-  std::vector<float> two = run(model, x, c.info("input").shape);
-  nn::set_num_threads(0);
-  ASSERT_EQ(one.size(), two.size());
-  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
+TEST(ConvNeXtTorchBf16, TinyOddSize200x328) {
+  check_case("convnext_tiny_weights.safetensors", "tiny_odd", nn::Precision::Bf16);
+}
+TEST(ConvNeXtTorchBf16, TinyBatch2) {
+  check_case("convnext_tiny_weights.safetensors", "tiny_batch2", nn::Precision::Bf16);
+}
+TEST(ConvNeXtTorchBf16, TinyFullHd1280x1920) {
+  check_case("convnext_tiny_weights.safetensors", "tiny_fullhd", nn::Precision::Bf16);
+}
+TEST(ConvNeXtTorchBf16, OddWidthConfig) {
+  check_case("convnext_small_cfg_weights.safetensors", "odd_cfg", nn::Precision::Bf16);
 }
 
 TEST(ConvNeXtTorchBf16, RefusedBelowAvx512) {
