@@ -147,8 +147,12 @@ void check_extraction(const std::string& variant, double threshold) {
       const auto& sb = mb.at({col, cand});
       const double vb = theirs[0 * n * u + cand * u + col] * static_cast<double>(H) + 1;
       const double vt = theirs[1 * n * u + cand * u + col] * static_cast<double>(H) + 1;
-      if (!near_int(vb)) EXPECT_EQ(sa.vB, sb.vB) << variant << " column " << col << " candidate " << cand;
-      if (!near_int(vt)) EXPECT_EQ(sa.vT, sb.vT) << variant << " column " << col << " candidate " << cand;
+      if (!near_int(vb)) {
+        EXPECT_EQ(sa.vB, sb.vB) << variant << " column " << col << " candidate " << cand;
+      }
+      if (!near_int(vt)) {
+        EXPECT_EQ(sa.vT, sb.vT) << variant << " column " << col << " candidate " << cand;
+      }
       EXPECT_NEAR(sa.d, sb.d, 1e-5 * sb.d);
       EXPECT_EQ(sa.u, sb.u);
       ++compared;
