@@ -50,6 +50,13 @@ const GemmShape kShapes[] = {
     {"ds3_k1536_n768", 2400, 1536, 768, Epi::Bias},
     {"s4_pw1_k768_n3072", 2400, 768, 3072, Epi::BiasGelu},
     {"s4_pw2_k3072_n768", 2400, 3072, 768, Epi::BiasScaleResidual},
+    // Faster R-CNN at 720x1280 (768x1344 padded): ResNet-50 1x1 convs, a 3x3 conv as
+    // im2col, the RoI box head's fc6 (1000 RoIs).
+    {"r50_l1_k64_n256", 64512, 64, 256, Epi::Bias},
+    {"r50_l1_k256_n64", 64512, 256, 64, Epi::Bias},
+    {"r50_l3_k1024_n256", 4032, 1024, 256, Epi::Bias},
+    {"fpn3x3_k2304_n256", 16128, 2304, 256, Epi::Bias},
+    {"fc6_k12544_n1024", 1000, 12544, 1024, Epi::Bias},
 };
 
 constexpr int kTileRows = 64;

@@ -124,10 +124,20 @@ int gemm_default_ukernel(Isa isa) {
   throw Error(std::string("gemm: no micro-kernel for ISA ") + isa_name(isa));
 }
 
-const char* gemm_kernel_name(Isa isa) { return kUkernels[gemm_default_ukernel(isa)].name; }
+int gemm_ukernel_for(Isa isa, int n) {
+  const int def = gemm_default_ukernel(isa);
+  auto padded = [n](int u) { return (n + kUkernels[u].nr - 1) / kUkernels[u].nr * kUkernels[u].nr - n; };
+  if (n <= 0 || 10 * padded(def) <= n) return def;
+  int best = def;
+  for (int i = 0; i < kUkernelCount; ++i)
+    if (kUkernels[i].isa == isa && padded(i) < padded(best)) best = i;
+  return best;
+}
+
+const char* gemm_kernel_name(Isa isa, int n) { return kUkernels[gemm_ukernel_for(isa, n)].name; }
 
 GemmWeights GemmWeights::pack(const float* w, int n, int k, Isa isa) {
-  return pack_for_ukernel(w, n, k, gemm_default_ukernel(isa));
+  return pack_for_ukernel(w, n, k, gemm_ukernel_for(isa, n));
 }
 
 GemmWeights GemmWeights::pack_for_ukernel(const float* w, int n, int k, int ukernel) {

@@ -38,10 +38,11 @@ struct GemmEpilogue {
 class GemmWeights {
  public:
   GemmWeights() = default;
-  // w: [n x k] row-major. Packs for `isa` (default: the active ISA).
+  // w: [n x k] row-major. Packs for `isa` (default: the active ISA), for the kernel
+  // gemm_kernel_name(isa, n) names (the ISA's default unless that pads N badly).
   static GemmWeights pack(const float* w, int n, int k, Isa isa = active_isa());
-  // Packs for one micro-kernel of the list in nn/gemm_kernels.h (pack() takes the ISA's
-  // default); tests and benchmarks use it to cover and compare every kernel.
+  // Packs for one micro-kernel of the list in nn/gemm_kernels.h; tests and benchmarks
+  // use it to cover and compare every kernel.
   static GemmWeights pack_for_ukernel(const float* w, int n, int k, int ukernel);
   int n() const { return n_; }
   int k() const { return k_; }
@@ -71,7 +72,8 @@ void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights&
 void gemm_ref(int m, int n, int k, const float* a, std::ptrdiff_t lda, const float* w, float* c,
               std::ptrdiff_t ldc, const GemmEpilogue& ep = {});
 
-// Name of the micro-kernel a GemmWeights packed for `isa` uses, e.g. "gemm_f32_14x32_avx512".
-const char* gemm_kernel_name(Isa isa);
+// Name of the micro-kernel pack() picks for `isa` and an N-column matrix, e.g.
+// "gemm_f32_8x48_avx512".
+const char* gemm_kernel_name(Isa isa, int n);
 
 }  // namespace nn

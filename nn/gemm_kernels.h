@@ -58,15 +58,21 @@ struct GemmTile {
 using GemmUkernelFn = void (*)(const GemmTile& tile);
 
 // X(function, Isa enumerator, MR, NR). Panel layout for a kernel: [ceil(n/NR)][k][NR],
-// zero-padded columns. The first kernel of each ISA is its default. On Zen 5 (measured
-// with bench/gemm_bench.cpp on the ConvNeXt-Tiny shapes) 8x48 (24 zmm accumulators;
-// 3 W loads and 8 broadcasts per 24 FMAs; 48 divides every ConvNeXt width) matches or
-// edges out 4x96; 12x32 (general-register spills) and 6x64 (a third wasted at N = 96)
-// were 5-20% slower and left out. Of the AVX2 pair (12 ymm accumulators each), 4x24
-// (7 loads per 12 FMAs against 8) is ahead by up to 20% on K = 96 and on large W.
+// zero-padded columns. The first kernel of each ISA is its default; pack() leaves it
+// only when it would pad more than a tenth of N's columns, for the kernel of that ISA
+// that pads the fewest (gemm_ukernel_for). Measured with bench/gemm_bench.cpp:
+// - 8x48 (24 zmm accumulators; 3 W loads and 8 broadcasts per 24 FMAs; 48 divides every
+//   ConvNeXt width) matches or edges out 4x96 and 6x64 on the ConvNeXt-Tiny shapes (Zen 5
+//   and Emerald Rapids); 12x32 (general-register spills) was 5-20% slower and left out.
+// - 6x64 for the detectors' widths of 64 * 2^k, where 8x48 wastes up to a third of its
+//   FMAs on padding: ResNet-50's K 256 -> N 64 1x1 conv 12.7 -> 7.8 ms, the FPN's 3x3
+//   256 -> 256 (as im2col) 69.8 -> 60.7 ms (Emerald Rapids, 2 threads).
+// - Of the AVX2 pair (12 ymm accumulators each), 4x24 (7 loads per 12 FMAs against 8) is
+//   ahead by up to 20% on K = 96 and on large W; 6x16 wins at N = 64 (18.9 -> 16.7 ms).
 #define NN_GEMM_UKERNELS(X)                 \
   X(gemm_f32_8x48_avx512, Avx512, 8, 48)    \
   X(gemm_f32_4x96_avx512, Avx512, 4, 96)    \
+  X(gemm_f32_6x64_avx512, Avx512, 6, 64)    \
   X(gemm_f32_4x24_avx2, Avx2, 4, 24)        \
   X(gemm_f32_6x16_avx2, Avx2, 6, 16)        \
   X(gemm_f32_4x16_scalar, Scalar, 4, 16)
@@ -87,6 +93,10 @@ int gemm_ukernel_count();
 const GemmUkernelInfo& gemm_ukernel(int ukernel);
 // Index of the default kernel for `isa`.
 int gemm_default_ukernel(Isa isa);
+// Index of the kernel GemmWeights::pack() uses for an N-column matrix: the default,
+// unless it pads more than n / 10 columns; then the ISA's kernel padding the fewest
+// (the earlier one on ties).
+int gemm_ukernel_for(Isa isa, int n);
 
 // The blocking and threading driver of gemm.cpp, for any kernel whose A and W elements
 // are 4 bytes wide: floats, or the bf16 GEMM's K pairs (nn/gemm_bf16.cpp passes its

@@ -341,20 +341,39 @@ INSTANTIATE_TEST_SUITE_P(AllKernels, GemmUkernelTest, testing::ValuesIn(supporte
 
 class GemmIsaTest : public testing::TestWithParam<nn::Isa> {};
 
-// pack() picks the ISA's default kernel, and gemm_kernel_name() names it.
-TEST_P(GemmIsaTest, PackUsesTheIsaDefaultKernel) {
+// pack() picks the ISA's default kernel unless it pads N by more than a tenth, and
+// gemm_kernel_name() names the kernel it picks.
+TEST_P(GemmIsaTest, PackUsesTheIsaDefaultKernelUnlessItPadsBadly) {
   const nn::Isa isa = GetParam();
-  const std::vector<float> w = random_vector(40 * 24, 3);
-  const GemmWeights packed = GemmWeights::pack(w.data(), 40, 24, isa);
-  EXPECT_EQ(packed.isa(), isa);
-  EXPECT_EQ(packed.n(), 40);
-  EXPECT_EQ(packed.k(), 24);
-  const std::string name = nn::gemm_kernel_name(isa);
-  EXPECT_EQ(name, nn::gemm_ukernel(packed.ukernel()).name);
-  EXPECT_EQ(name.rfind("gemm_f32_", 0), 0u) << name;
-  EXPECT_NE(name.find(nn::isa_name(isa)), std::string::npos) << name;
-  const int nr = nn::gemm_ukernel(packed.ukernel()).nr;
-  EXPECT_EQ(packed.bytes(), sizeof(float) * static_cast<std::size_t>((40 + nr - 1) / nr) * nr * 24);
+  const int def = nn::gemm_default_ukernel(isa);
+  const int def_nr = nn::gemm_ukernel(def).nr;
+  for (int n : {40, def_nr, 3 * def_nr, 64, 256, 1024, 4 * def_nr + 1}) {
+    SCOPED_TRACE(n);
+    const std::vector<float> w = random_vector(static_cast<std::size_t>(n) * 24, 3);
+    const GemmWeights packed = GemmWeights::pack(w.data(), n, 24, isa);
+    EXPECT_EQ(packed.isa(), isa);
+    EXPECT_EQ(packed.n(), n);
+    EXPECT_EQ(packed.k(), 24);
+    const std::string name = nn::gemm_kernel_name(isa, n);
+    EXPECT_EQ(name, nn::gemm_ukernel(packed.ukernel()).name);
+    EXPECT_EQ(name.rfind("gemm_f32_", 0), 0u) << name;
+    EXPECT_NE(name.find(nn::isa_name(isa)), std::string::npos) << name;
+    const int nr = nn::gemm_ukernel(packed.ukernel()).nr;
+    EXPECT_EQ(packed.bytes(), sizeof(float) * static_cast<std::size_t>((n + nr - 1) / nr) * nr * 24);
+    auto pad = [n](int r) { return (n + r - 1) / r * r - n; };
+    if (10 * pad(def_nr) <= n) {
+      EXPECT_EQ(packed.ukernel(), def);
+    } else {
+      for (int u = 0; u < nn::gemm_ukernel_count(); ++u) {
+        if (nn::gemm_ukernel(u).isa != isa) continue;
+        EXPECT_LE(pad(nr), pad(nn::gemm_ukernel(u).nr)) << nn::gemm_ukernel(u).name;
+      }
+    }
+  }
+  if (isa == nn::Isa::Avx512) {
+    EXPECT_STREQ(nn::gemm_kernel_name(isa, 384), "gemm_f32_8x48_avx512");  // ConvNeXt widths keep 8x48
+    EXPECT_STREQ(nn::gemm_kernel_name(isa, 256), "gemm_f32_6x64_avx512");
+  }
 }
 
 // The epilogue activation is the same vector routine as apply_act: same bits.
