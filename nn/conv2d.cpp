@@ -26,12 +26,26 @@ bool Conv2dWeights::is_pointwise() const {
          p_.pad_w == 0;
 }
 
+bool conv2d_winograd_applies(const Conv2dParams& p) {
+  return p.kh == 3 && p.kw == 3 && p.stride_h == 1 && p.stride_w == 1 && p.pad_h == 1 && p.pad_w == 1 &&
+         p.groups == 1 && p.cin >= kWinogradMinChannels && p.cout >= kWinogradMinChannels;
+}
+
 Conv2dWeights Conv2dWeights::pack(const float* w, const float* bias, const Conv2dParams& p,
                                   Isa isa) {
   check_params(p);
   if (p.groups != 1) throw Error("conv2d: grouped convolution is not supported by the GEMM path");
+  if (!w) throw Error("conv2d: weight pointer is null");
   Conv2dWeights out;
   out.p_ = p;
+  if (bias) {
+    out.bias_.resize(p.cout);
+    std::memcpy(out.bias_.data(), bias, sizeof(float) * p.cout);
+  }
+  if (conv2d_winograd_applies(p) && winograd_enabled()) {
+    out.winograd_ = WinogradWeights::pack(w, p.cin, p.cout, isa);
+    return out;
+  }
   // im2col rows are ordered (ky, kx, c) because NHWC keeps a pixel's channels
   // contiguous; PyTorch stores (c, ky, kx), so reorder before packing.
   const int k = p.kh * p.kw * p.cin;
@@ -43,10 +57,6 @@ Conv2dWeights Conv2dWeights::pack(const float* w, const float* bias, const Conv2
           reordered[static_cast<std::size_t>(o) * k + (ky * p.kw + kx) * p.cin + c] =
               w[((static_cast<std::size_t>(o) * p.cin + c) * p.kh + ky) * p.kw + kx];
   out.gemm_ = GemmWeights::pack(reordered.data(), p.cout, k, isa);
-  if (bias) {
-    out.bias_.resize(p.cout);
-    std::memcpy(out.bias_.data(), bias, sizeof(float) * p.cout);
-  }
   return out;
 }
 
@@ -62,9 +72,10 @@ Shape conv2d_output_shape(const Shape& in, const Conv2dParams& p) {
 
 int conv2d_block_rows(int out_w) { return out_w >= kConvBlockPixels ? 1 : (kConvBlockPixels + out_w - 1) / out_w; }
 
-std::size_t conv2d_scratch_floats(const Conv2dParams& p, int out_w) {
-  if (p.kh == 1 && p.kw == 1 && p.stride_h == 1 && p.stride_w == 1 && p.pad_h == 0 && p.pad_w == 0)
-    return 0;
+std::size_t conv2d_scratch_floats(const Conv2dWeights& w, int out_w) {
+  const Conv2dParams& p = w.params();
+  if (w.is_winograd()) return winograd_scratch_floats(p.cin, p.cout);
+  if (w.is_pointwise()) return 0;
   return static_cast<std::size_t>(conv2d_block_rows(out_w)) * out_w * p.kh * p.kw * p.cin;
 }
 
@@ -99,6 +110,7 @@ void im2col_row(const ConstTensorView& in, const Conv2dParams& p, int n, int oy,
 void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out, int n,
                  int y0, int y1, float* scratch, Act act, const float* residual,
                  bool act_after_residual) {
+  if (w.is_winograd()) throw Error("conv2d: conv2d_rows() takes direct weights; Winograd layers run through conv2d()");
   const Conv2dParams& p = w.params();
   const int ow = out.shape.w, cin = p.cin;
   const int k = p.kh * p.kw * cin;
@@ -127,7 +139,11 @@ void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView&
             float* scratch, Act act, const float* residual, bool act_after_residual) {
   if (in.shape.c != w.params().cin || out.shape != conv2d_output_shape(in.shape, w.params()))
     throw Error("conv2d: tensor shapes do not match the convolution");
-  const std::size_t per_thread = conv2d_scratch_floats(w.params(), out.shape.w);
+  if (w.is_winograd()) {
+    winograd_conv2d(in, w.winograd(), w.bias(), out, scratch, act, residual, act_after_residual);
+    return;
+  }
+  const std::size_t per_thread = conv2d_scratch_floats(w, out.shape.w);
   // Blocks of at most conv2d_block_rows() rows, as many per image as a multiple of the
   // team so no thread idles on small maps (the result does not depend on the split).
   const int team = std::max(1, num_threads()), h = out.shape.h;

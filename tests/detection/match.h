@@ -30,6 +30,7 @@ inline double iou(const Box& a, const Box& b) {
 struct MatchResult {
   std::size_t matched = 0, total = 0;
   std::string unmatched;  // the first few misses, for the test log
+  std::vector<std::size_t> missed;  // indexes into `from` of every miss
   double fraction() const { return total ? double(matched) / total : 1.0; }
 };
 
@@ -52,13 +53,52 @@ inline MatchResult match(const std::vector<Box>& from, const std::vector<float>&
     }
     if (ok) {
       ++r.matched;
-    } else if (shown++ < 8) {
+      continue;
+    }
+    r.missed.push_back(i);
+    if (shown++ < 8) {
       miss << " #" << i << " [" << from[i].x1 << "," << from[i].y1 << "," << from[i].x2 << "," << from[i].y2 << "]";
       if (!from_scores.empty()) miss << " score " << from_scores[i];
     }
   }
   r.unmatched = miss.str();
   return r;
+}
+
+// Why a detection of one side can lack a partner on the other: its score sits within
+// `tol` of a decision that float rounding can flip. That is the score threshold, the
+// lowest score the other side kept (the top-n cut), or another detection of the same
+// label with a different box (IoU < 0.99) and a score within tol on either side, so
+// that NMS order between the two is a toss-up. Returns the misses none of these explain.
+inline std::string unexplained_misses(const MatchResult& r, const std::vector<Box>& from,
+                                      const std::vector<float>& from_scores,
+                                      const std::vector<std::int64_t>& from_labels, const std::vector<Box>& to,
+                                      const std::vector<float>& to_scores,
+                                      const std::vector<std::int64_t>& to_labels, double score_thresh,
+                                      double tol) {
+  std::ostringstream out;
+  for (std::size_t i : r.missed) {
+    const double s = from_scores[i];
+    bool explained = std::fabs(s - score_thresh) <= tol;
+    if (!to_scores.empty()) {
+      double lowest = to_scores[0];
+      for (float t : to_scores) lowest = std::min(lowest, double(t));
+      explained = explained || std::fabs(s - lowest) <= tol;
+    }
+    auto rival = [&](const std::vector<Box>& b, const std::vector<float>& sc, const std::vector<std::int64_t>& lb,
+                     bool same_side) {
+      for (std::size_t k = 0; k < b.size(); ++k) {
+        if (same_side && k == i) continue;
+        if (lb[k] == from_labels[i] && std::fabs(sc[k] - s) <= tol && iou(b[k], from[i]) < 0.99) return true;
+      }
+      return false;
+    };
+    explained = explained || rival(from, from_scores, from_labels, true) || rival(to, to_scores, to_labels, false);
+    if (!explained)
+      out << " #" << i << " [" << from[i].x1 << "," << from[i].y1 << "," << from[i].x2 << "," << from[i].y2
+          << "] score " << s;
+  }
+  return out.str();
 }
 
 }  // namespace dettest

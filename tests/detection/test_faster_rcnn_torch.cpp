@@ -60,6 +60,14 @@ void check_case(const std::string& key, FasterRcnnVariant v, const std::string& 
   if (!d2.unmatched.empty()) std::printf("  our detections unmatched:%s\n", d2.unmatched.c_str());
   EXPECT_GE(d1.fraction(), 0.95) << what;
   EXPECT_GE(d2.fraction(), 0.95) << what;
+  // Every miss must sit within 1e-4 of a threshold or of a rival in NMS order.
+  const double thresh = model.config().roi_heads.score_thresh;
+  EXPECT_EQ("", dettest::unexplained_misses(d1, ref_boxes, ref_scores, ref_labels, det.boxes, det.scores, det.labels,
+                                            thresh, 1e-4))
+      << what << ": torchvision detections unmatched for no rounding reason";
+  EXPECT_EQ("", dettest::unexplained_misses(d2, det.boxes, det.scores, det.labels, ref_boxes, ref_scores, ref_labels,
+                                            thresh, 1e-4))
+      << what << ": our detections unmatched for no rounding reason";
 }
 
 TEST(FasterRcnnTorch, MobileNetV3LargeFpn720p) { check_case("mnv3", FasterRcnnVariant::MobileNetV3LargeFpn, "720p"); }

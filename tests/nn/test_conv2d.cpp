@@ -54,7 +54,7 @@ std::vector<float> run(const Case& c, const std::vector<float>& x, const nn::Con
   nn::set_num_threads(threads);
   const Shape os = nn::conv2d_output_shape(c.in, c.p);
   std::vector<float> out(os.count(), 7.0f);
-  nn::AlignedBuffer scratch(nn::conv2d_scratch_floats(c.p, os.w) * 2 + 1);
+  nn::AlignedBuffer scratch(nn::conv2d_scratch_floats(w, os.w) * 2 + 1);
   nn::conv2d(nn::ConstTensorView(x.data(), c.in), w, nn::TensorView{out.data(), os}, scratch.data(), c.act,
              c.residual ? res.data() : nullptr, c.residual);
   nn::set_num_threads(0);

@@ -14,6 +14,8 @@ namespace {
 
 // Single ops against fp32 PyTorch: the only difference allowed is summation order.
 constexpr double kOpRelTol = 2e-6;
+// Winograd F(4x4, 3x3) rounds more (nn/winograd.h): 3e-6 measured on these cases.
+constexpr double kWinogradRelTol = 1e-5;
 
 class OpsTorch : public testing::TestWithParam<nn::Isa> {
  protected:
@@ -53,7 +55,8 @@ TEST_P(OpsTorch, Linear) {
 }
 
 TEST_P(OpsTorch, Conv2d) {
-  for (const char* name : {"stem4x4s4", "down2x2s2", "3x3s1p1", "3x3s2p1", "7x7s2p3", "1x1", "1px3x3p1"}) {
+  for (const char* name :
+       {"stem4x4s4", "down2x2s2", "3x3s1p1", "3x3s1p1_wide", "3x3s2p1", "7x7s2p3", "1x1", "1px3x3p1"}) {
     auto f = reftest::load_ref(std::string("ops_conv_") + name + ".safetensors");
     auto xs = f.info("x").shape, ws = f.info("weight").shape;
     auto prm = f.f32("params");
@@ -65,11 +68,21 @@ TEST_P(OpsTorch, Conv2d) {
     auto w = f.f32("weight"), b = f.f32("bias");
     auto x = to_nhwc(f.f32("x"), xs);
     nn::Shape in{(int)xs[0], (int)xs[2], (int)xs[3], (int)xs[1]};
-    nn::Conv2dWeights cw = nn::Conv2dWeights::pack(w.data(), b.data(), p);
-    nn::Shape os = nn::conv2d_output_shape(in, p);
-    nn::AlignedBuffer out(os.count()), scratch(nn::conv2d_scratch_floats(p, os.w) * 8);
-    nn::conv2d(nn::ConstTensorView(x.data(), in), cw, nn::TensorView{out.data(), os}, scratch.data());
-    reftest::expect_close_rel_max(to_nchw({out.data(), os}).data(), f.f32("expected"), kOpRelTol, name);
+    const nn::Shape os = nn::conv2d_output_shape(in, p);
+    // The direct form always; Winograd too where the layer qualifies for it.
+    for (const bool winograd : {false, true}) {
+      if (winograd && !nn::conv2d_winograd_applies(p)) continue;
+      const bool saved = nn::winograd_enabled();
+      nn::set_winograd(winograd);
+      const nn::Conv2dWeights cw = nn::Conv2dWeights::pack(w.data(), b.data(), p);
+      nn::set_winograd(saved);
+      ASSERT_EQ(cw.is_winograd(), winograd) << name;
+      nn::AlignedBuffer out(os.count()), scratch(nn::conv2d_scratch_floats(cw, os.w) * 8);
+      nn::conv2d(nn::ConstTensorView(x.data(), in), cw, nn::TensorView{out.data(), os}, scratch.data());
+      reftest::expect_close_rel_max(to_nchw({out.data(), os}).data(), f.f32("expected"),
+                                    winograd ? kWinogradRelTol : kOpRelTol,
+                                    std::string(name) + (winograd ? " (winograd)" : " (direct)"));
+    }
     // The scalar reference agrees with PyTorch as well.
     nn::AlignedBuffer ref(os.count());
     nn::conv2d_ref(nn::ConstTensorView(x.data(), in), w.data(), b.data(), p, nn::TensorView{ref.data(), os});

@@ -52,8 +52,8 @@ void Fpn::plan(const std::vector<Shape>& inputs) {
     inner_out_[i].resize(s);
     upsampled_[i].resize(s);
     out_[i].resize(s);
-    scratch_.require(inner_[i].params(), s.w);
-    scratch_.require(layer_[i].params(), s.w);
+    scratch_.require(inner_[i], s.w);
+    scratch_.require(layer_[i], s.w);
   }
   const Shape last = out_[n - 1].shape;
   pool_.resize({1, (last.h - 1) / 2 + 1, (last.w - 1) / 2 + 1, kChannels});

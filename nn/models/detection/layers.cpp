@@ -59,8 +59,8 @@ Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefi
   return Conv2dWeights::pack(w.data(), b.data(), p);
 }
 
-void ConvScratch::require(const Conv2dParams& p, int out_w) {
-  per_thread_ = std::max(per_thread_, conv2d_scratch_floats(p, out_w));
+void ConvScratch::require(const Conv2dWeights& w, int out_w) {
+  per_thread_ = std::max(per_thread_, conv2d_scratch_floats(w, out_w));
 }
 
 void ConvScratch::allocate() {

@@ -45,7 +45,7 @@ Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefi
 // Thread-shared im2col scratch for every conv2d of a model, sized by the largest need.
 class ConvScratch {
  public:
-  void require(const Conv2dParams& p, int out_w);
+  void require(const Conv2dWeights& w, int out_w);
   void allocate();
   float* get();  // re-sizes if the thread count grew since planning
  private:

@@ -120,11 +120,11 @@ void MobileNetV3Backbone::plan(int h, int w) {
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   grow(pp_max, s);
   scratch_ = ConvScratch();
-  scratch_.require(stem_.params(), s.w);
+  scratch_.require(stem_, s.w);
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
     if (b.has_expand) {
-      scratch_.require(b.expand.params(), s.w);
+      scratch_.require(b.expand, s.w);
       b.a = {1, s.h, s.w, b.exp};
       grow(a_max, b.a);
     }
@@ -136,7 +136,7 @@ void MobileNetV3Backbone::plan(int h, int w) {
       b.squeezed.resize({1, 1, 1, b.se});
       b.excited.resize({1, 1, 1, b.exp});
     }
-    scratch_.require(b.project.params(), s.w);
+    scratch_.require(b.project, s.w);
     s.c = b.cout;
     b.out = s;
     if (i == kC13Block) c13_out_.resize(s);
@@ -146,7 +146,7 @@ void MobileNetV3Backbone::plan(int h, int w) {
   tmp_a_.resize(a_max);
   tmp_b_.resize(b_max);
   for (auto& buf : pingpong_) buf.resize(pp_max);
-  scratch_.require(last_.params(), s.w);
+  scratch_.require(last_, s.w);
   last_out_.resize({1, s.h, s.w, kLast});
   scratch_.allocate();
   outs_.reserve(2);

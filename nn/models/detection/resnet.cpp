@@ -67,7 +67,7 @@ void ResNet50Backbone::plan(int h, int w) {
   std::size_t a_max = 0, b_max = 0, id_max = 0, pp_max = 0;
   auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
-  scratch_.require(stem_.params(), s.w);
+  scratch_.require(stem_, s.w);
   grow(pp_max, s);
   s = max_pool2d_output_shape(s, MaxPoolParams{});
   pooled_.resize(s);
@@ -82,10 +82,10 @@ void ResNet50Backbone::plan(int h, int w) {
       grow(b_max, b.b);
       if (b.has_downsample) grow(id_max, conv2d_output_shape(s, b.downsample.params()));
       if (i + 1 < layers_[l].size()) grow(pp_max, b.out);
-      scratch_.require(b.conv1.params(), b.a.w);
-      scratch_.require(b.conv2.params(), b.b.w);
-      scratch_.require(b.conv3.params(), b.out.w);
-      if (b.has_downsample) scratch_.require(b.downsample.params(), b.out.w);
+      scratch_.require(b.conv1, b.a.w);
+      scratch_.require(b.conv2, b.b.w);
+      scratch_.require(b.conv3, b.out.w);
+      if (b.has_downsample) scratch_.require(b.downsample, b.out.w);
       s = b.out;
     }
     layer_out_[l].resize(s);

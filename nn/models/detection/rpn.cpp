@@ -42,7 +42,7 @@ void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
     const Shape& s = levels[l];
     hidden_[l].resize({1, s.h, s.w, 256});
     head_out_[l].resize({1, s.h, s.w, 5 * a_});
-    scratch_.require(conv_.params(), s.w);
+    scratch_.require(conv_, s.w);
     const auto cell = cell_anchors(cfg_.anchor_sizes[l], cfg_.aspect_ratios);
     if (static_cast<int>(cell.size()) != a_) throw Error("RPN: every level needs the same number of anchors");
     anchors_.push_back(grid_anchors(cell, s.h, s.w, sizes.padded_h, sizes.padded_w));

@@ -1,0 +1,12 @@
+// AVX512 Winograd F(4x4, 3x3) transforms: 16 channels per vector (nn/winograd_transform.h).
+#include "nn/winograd_transform.h"
+
+namespace nn {
+namespace {
+typedef float Vec __attribute__((vector_size(64)));
+}  // namespace
+
+void winograd_input_tile_avx512(const WinogradInputTile& t) { winograd_input_tile_with<Vec>(t); }
+void winograd_output_tile_avx512(const WinogradOutputTile& t) { winograd_output_tile_with<Vec>(t); }
+
+}  // namespace nn
