@@ -57,6 +57,14 @@ const GemmShape kShapes[] = {
     {"r50_l3_k1024_n256", 4032, 1024, 256, Epi::Bias},
     {"fpn3x3_k2304_n256", 16128, 2304, 256, Epi::Bias},
     {"fc6_k12544_n1024", 1000, 12544, 1024, Epi::Bias},
+    // MobileNetV3-Large at 720x1280: the stem as im2col, narrow 1x1 convs.
+    {"mnv3_stem_k27_n16", 258048, 27, 16, Epi::Bias},
+    {"mnv3_b1_k16_n16", 258048, 16, 16, Epi::Bias},
+    {"mnv3_b2_k16_n64", 258048, 16, 64, Epi::Bias},
+    {"mnv3_b3_k72_n24", 64512, 72, 24, Epi::Bias},
+    {"mnv3_b4_k72_n40", 16128, 72, 40, Epi::Bias},
+    {"mnv3_b11_k480_n112", 4032, 480, 112, Epi::Bias},
+    {"mnv3_b13_k672_n160", 1008, 672, 160, Epi::Bias},
 };
 
 constexpr int kTileRows = 64;

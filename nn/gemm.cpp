@@ -126,12 +126,16 @@ int gemm_default_ukernel(Isa isa) {
 
 int gemm_ukernel_for(Isa isa, int n) {
   const int def = gemm_default_ukernel(isa);
-  auto padded = [n](int u) { return (n + kUkernels[u].nr - 1) / kUkernels[u].nr * kUkernels[u].nr - n; };
-  if (n <= 0 || 10 * padded(def) <= n) return def;
+  if (n <= 0) return def;
+  const int lanes = isa == Isa::Avx2 ? 8 : 16;
+  auto cost = [n, lanes](int u) {
+    const int nr = kUkernels[u].nr;
+    return static_cast<double>((n + nr - 1) / nr * nr) * (nr == lanes ? 1.2 : 1.0);
+  };
   int best = def;
   for (int i = 0; i < kUkernelCount; ++i)
-    if (kUkernels[i].isa == isa && padded(i) < padded(best)) best = i;
-  return best;
+    if (kUkernels[i].isa == isa && cost(i) < cost(best)) best = i;
+  return cost(def) > 1.1 * cost(best) ? best : def;
 }
 
 const char* gemm_kernel_name(Isa isa, int n) { return kUkernels[gemm_ukernel_for(isa, n)].name; }

@@ -59,20 +59,25 @@ using GemmUkernelFn = void (*)(const GemmTile& tile);
 
 // X(function, Isa enumerator, MR, NR). Panel layout for a kernel: [ceil(n/NR)][k][NR],
 // zero-padded columns. The first kernel of each ISA is its default; pack() leaves it
-// only when it would pad more than a tenth of N's columns, for the kernel of that ISA
-// that pads the fewest (gemm_ukernel_for). Measured with bench/gemm_bench.cpp:
+// only when it would cost over a tenth more than the ISA's cheapest kernel for that N
+// (gemm_ukernel_for): cost = padded columns, times 1.2 for a kernel one vector wide
+// (one W load per MR FMAs leaves it load-bound). Measured with bench/gemm_bench.cpp:
 // - 8x48 (24 zmm accumulators; 3 W loads and 8 broadcasts per 24 FMAs; 48 divides every
 //   ConvNeXt width) matches or edges out 4x96 and 6x64 on the ConvNeXt-Tiny shapes (Zen 5
-//   and Emerald Rapids); 12x32 (general-register spills) was 5-20% slower and left out.
+//   and Emerald Rapids); 12x32 (general-register spills on Zen 5; on Emerald Rapids no
+//   better than 14x16 or 8x48 at MobileNet's N = 24..160) was left out.
 // - 6x64 for the detectors' widths of 64 * 2^k, where 8x48 wastes up to a third of its
 //   FMAs on padding: ResNet-50's K 256 -> N 64 1x1 conv 12.7 -> 7.8 ms, the FPN's 3x3
 //   256 -> 256 (as im2col) 69.8 -> 60.7 ms (Emerald Rapids, 2 threads).
+// - 14x16 for N = 16 (MobileNetV3's stem and first block): 2.42 -> 1.36 ms for the stem's
+//   K 27 GEMM; at K 672, N 160 it is 15 % slower than 8x48, hence the 1.2.
 // - Of the AVX2 pair (12 ymm accumulators each), 4x24 (7 loads per 12 FMAs against 8) is
 //   ahead by up to 20% on K = 96 and on large W; 6x16 wins at N = 64 (18.9 -> 16.7 ms).
 #define NN_GEMM_UKERNELS(X)                 \
   X(gemm_f32_8x48_avx512, Avx512, 8, 48)    \
   X(gemm_f32_4x96_avx512, Avx512, 4, 96)    \
   X(gemm_f32_6x64_avx512, Avx512, 6, 64)    \
+  X(gemm_f32_14x16_avx512, Avx512, 14, 16)  \
   X(gemm_f32_4x24_avx2, Avx2, 4, 24)        \
   X(gemm_f32_6x16_avx2, Avx2, 6, 16)        \
   X(gemm_f32_4x16_scalar, Scalar, 4, 16)
@@ -93,9 +98,9 @@ int gemm_ukernel_count();
 const GemmUkernelInfo& gemm_ukernel(int ukernel);
 // Index of the default kernel for `isa`.
 int gemm_default_ukernel(Isa isa);
-// Index of the kernel GemmWeights::pack() uses for an N-column matrix: the default,
-// unless it pads more than n / 10 columns; then the ISA's kernel padding the fewest
-// (the earlier one on ties).
+// Index of the kernel GemmWeights::pack() uses for an N-column matrix: the ISA's
+// default, unless its cost (above) exceeds the cheapest kernel's by more than a tenth;
+// then the cheapest (the earlier one on ties).
 int gemm_ukernel_for(Isa isa, int n);
 
 // The blocking and threading driver of gemm.cpp, for any kernel whose A and W elements

@@ -131,25 +131,34 @@ Shape global_avg_pool_shape(const Shape& in) {
 void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
   check_io("global_avg_pool", in, out, global_avg_pool_shape(in.shape));
   const Shape& s = in.shape;
-  constexpr int kSlice = 256;
-  const long long slices = (s.c + kSlice - 1) / kSlice;
-  const long long items = s.n * slices;
+  // Channels in slices of kSlice; the pixels of an image in kParts fixed ranges summed
+  // in parallel, then the partial sums in range order: the bits do not depend on the
+  // thread count, and all of the team works however few channels there are.
+  constexpr int kSlice = 256, kParts = 8;
   const long long pixels = static_cast<long long>(s.h) * s.w;
+  for (int n = 0; n < s.n; ++n)
+    for (int c0 = 0; c0 < s.c; c0 += kSlice) {
+      const int cn = s.c - c0 < kSlice ? s.c - c0 : kSlice;
+      double partial[kParts][kSlice];
+      const float* src = in.data + n * pixels * s.c + c0;
 #ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1 && s.count() > 65536)
+      const int threads = team_size();
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && pixels * cn > 65536)
 #endif
-  for (long long it = 0; it < items; ++it) {
-    const long long n = it / slices;
-    const int c0 = static_cast<int>(it % slices) * kSlice;
-    const int cn = s.c - c0 < kSlice ? s.c - c0 : kSlice;
-    double acc[kSlice] = {};
-    const float* src = in.data + n * pixels * s.c + c0;
-    for (long long px = 0; px < pixels; ++px)
-      for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + i];
-    float* dst = out.data + n * s.c + c0;
-    for (int i = 0; i < cn; ++i) dst[i] = static_cast<float>(acc[i] / static_cast<double>(pixels));
-  }
+      for (int part = 0; part < kParts; ++part) {
+        double* acc = partial[part];
+        for (int i = 0; i < cn; ++i) acc[i] = 0.0;
+        const long long p1 = pixels * (part + 1) / kParts;
+        for (long long px = pixels * part / kParts; px < p1; ++px)
+          for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + i];
+      }
+      float* dst = out.data + static_cast<std::size_t>(n) * s.c + c0;
+      for (int i = 0; i < cn; ++i) {
+        double sum = 0.0;
+        for (int part = 0; part < kParts; ++part) sum += partial[part][i];
+        dst[i] = static_cast<float>(sum / static_cast<double>(pixels));
+      }
+    }
 }
 
 }  // namespace nn

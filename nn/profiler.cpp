@@ -4,6 +4,11 @@
 
 namespace nn {
 
+std::string nchw_str(const Shape& s) {
+  return "[" + std::to_string(s.n) + ", " + std::to_string(s.c) + ", " + std::to_string(s.h) + ", " +
+         std::to_string(s.w) + "]";
+}
+
 int Profiler::add(std::string layer, std::string op, std::string shape, double flops) {
   entries_.push_back({std::move(layer), std::move(op), std::move(shape), flops, 0.0, 0});
   return static_cast<int>(entries_.size()) - 1;

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "nn/tensor.h"
+
 namespace nn {
 
 struct ProfileEntry {
@@ -16,6 +18,9 @@ struct ProfileEntry {
   double total_ms = 0;
   int calls = 0;
 };
+
+// An NHWC shape as PyTorch prints the NCHW tensor: "[n, c, h, w]".
+std::string nchw_str(const Shape& s);
 
 class Profiler {
  public:
@@ -35,11 +40,14 @@ class Profiler {
     Scope(Profiler* p, int index)
         : p_(p && p->enabled_ ? p : nullptr), index_(index),
           start_(p_ ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point()) {}
-    ~Scope() {
+    ~Scope() { stop(); }
+    // Ends the timing before the scope does (once; later calls do nothing).
+    void stop() {
       if (!p_) return;
       auto& e = p_->entries_[index_];
       e.total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
       e.calls += 1;
+      p_ = nullptr;
     }
     Scope(const Scope&) = delete;
     Scope& operator=(const Scope&) = delete;

@@ -78,6 +78,7 @@ class DetectorRunner : public Runner {
   }
 
   nn::Profiler& profiler() override { return model_.profiler(); }
+  nn::Profiler* layer_profiler() override { return &model_.layer_profiler(); }
 
  private:
   std::string name_;

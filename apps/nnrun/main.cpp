@@ -143,6 +143,11 @@ int main(int argc, char** argv) {
     if (repeat > 0 || profile) {
       runner->profiler().set_enabled(profile);
       runner->profiler().reset_times();
+      nn::Profiler* layers = runner->layer_profiler();
+      if (layers) {
+        layers->set_enabled(profile);
+        layers->reset_times();
+      }
       std::vector<double> ms;
       const int passes = std::max(repeat, 1);
       for (int i = 0; i < passes; ++i) {
@@ -150,7 +155,10 @@ int main(int argc, char** argv) {
         runner->forward();
         ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       }
-      if (profile) std::fputs(runner->profiler().table().c_str(), stdout);
+      if (profile) {
+        std::fputs(runner->profiler().table().c_str(), stdout);
+        if (layers) std::printf("\nby layer:\n%s", layers->table().c_str());
+      }
       if (repeat > 0) {
         std::printf("peak_rss_mb=%.1f\n", peak_rss_mb());
       }

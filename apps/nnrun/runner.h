@@ -26,6 +26,8 @@ class Runner {
   // Adds the outputs of the last forward, in PyTorch's layout.
   virtual void write_outputs(weights::Writer& out) const = 0;
   virtual nn::Profiler& profiler() = 0;
+  // A second, finer table (the detectors' backbone layers and RoI-head parts), or null.
+  virtual nn::Profiler* layer_profiler() { return nullptr; }
   // Also write the RPN proposals; false when the model has none.
   virtual bool enable_proposal_dump() { return false; }
 };

@@ -27,11 +27,6 @@ std::string join(const std::vector<int>& v) {
   return s + "]";
 }
 
-std::string nchw(const Shape& s) {
-  return "[" + std::to_string(s.n) + ", " + std::to_string(s.c) + ", " + std::to_string(s.h) +
-         ", " + std::to_string(s.w) + "]";
-}
-
 AlignedBuffer load_vec(const weights::SafeTensors& st, const std::string& name) {
   std::vector<float> v = st.f32(name);
   AlignedBuffer b(v.size());
@@ -242,7 +237,7 @@ void ConvNeXt::plan(int n, int h, int w) {
   conv_scratch_ = static_cast<std::size_t>(stem_chunk_) * s.w * 48;
   std::size_t mlp_scratch = 0;  // per thread for fused stages; whole for unfused
   std::size_t shared_scratch = 0;
-  prof_stem_ = prof_.add("features.0", "conv 4x4/4 + LayerNorm", nchw(s),
+  prof_stem_ = prof_.add("features.0", "conv 4x4/4 + LayerNorm", nchw_str(s),
                          2.0 * s.count() * 48);
   for (std::size_t si = 0; si < stages_.size(); ++si) {
     Stage& st = stages_[si];
@@ -258,7 +253,7 @@ void ConvNeXt::plan(int n, int h, int w) {
       else
         conv_scratch_ = std::max(conv_scratch_, st.down_chunk * d.w * patch);
       st.prof_down = prof_.add("features." + std::to_string(2 * si), "LayerNorm + conv 2x2/2",
-                               nchw(d), 2.0 * d.count() * 4 * s.c);
+                               nchw_str(d), 2.0 * d.count() * 4 * s.c);
       s = d;
     }
     stage_shapes_.push_back(s);
@@ -272,8 +267,8 @@ void ConvNeXt::plan(int n, int h, int w) {
     for (std::size_t i = 0; i < st.blocks.size(); ++i) {
       Block& b = st.blocks[i];
       const std::string name = "features." + std::to_string(2 * si + 1) + "." + std::to_string(i);
-      b.prof_dw = prof_.add(name, "dwconv 7x7", nchw(s), 2.0 * s.count() * 49);
-      b.prof_mlp = prof_.add(name, "LN+pw1+GELU+pw2+scale+res", nchw(s), 2.0 * m * c * 4 * c * 2);
+      b.prof_dw = prof_.add(name, "dwconv 7x7", nchw_str(s), 2.0 * s.count() * 49);
+      b.prof_mlp = prof_.add(name, "LN+pw1+GELU+pw2+scale+res", nchw_str(s), 2.0 * m * c * 4 * c * 2);
     }
   }
   out_shape_ = s;

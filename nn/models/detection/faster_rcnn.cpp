@@ -98,7 +98,8 @@ void FasterRcnn::plan(int h, int w) {
   input_.resize({1, sizes_.padded_h, sizes_.padded_w, 3});
   normalised_.resize({1, h, w, 3});
   resized_.resize({1, sizes_.resized_h, sizes_.resized_w, 3});
-  backbone_->plan(sizes_.padded_h, sizes_.padded_w);
+  layer_profiler_.clear();
+  backbone_->plan(sizes_.padded_h, sizes_.padded_w, &layer_profiler_);
   // Shapes follow from a dry run of the size rules of each part.
   std::vector<ConstTensorView> feats = backbone_->forward(input_.cview());
   std::vector<Shape> fs;
@@ -109,7 +110,7 @@ void FasterRcnn::plan(int h, int w) {
   for (auto& p : pyramid) ps.push_back(p.shape);
   rpn_.plan(ps, sizes_);
   ps.pop_back();  // 'pool' feeds only the RPN
-  roi_heads_.plan(ps, sizes_, cfg_.rpn.post_nms_top_n);
+  roi_heads_.plan(ps, sizes_, cfg_.rpn.post_nms_top_n, &layer_profiler_);
   pooled_.reserve(pyramid.size());
   const std::size_t rois = static_cast<std::size_t>(std::max(cfg_.rpn.post_nms_top_n, 0));
   proposals_.boxes.reserve(rois);

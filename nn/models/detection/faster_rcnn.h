@@ -57,7 +57,10 @@ class FasterRcnn {
   const ImageSizes& sizes() const { return sizes_; }
   ConstTensorView transformed() const { return input_.cview(); }
   const Proposals& proposals() const { return proposals_; }
+  // Per stage (transform, backbone.body, backbone.fpn, rpn, roi_heads) and, apart,
+  // per layer of the backbone body and per part of the RoI heads.
   Profiler& profiler() { return profiler_; }
+  Profiler& layer_profiler() { return layer_profiler_; }
 
  private:
   FasterRcnnConfig cfg_;
@@ -71,7 +74,7 @@ class FasterRcnn {
   Proposals proposals_;
   std::vector<ConstTensorView> pooled_;  // the pyramid without 'pool'
   Detections detections_;
-  Profiler profiler_;
+  Profiler profiler_, layer_profiler_;
   int planned_h_ = 0, planned_w_ = 0;
   int prof_transform_ = 0, prof_backbone_ = 0, prof_fpn_ = 0, prof_rpn_ = 0, prof_roi_ = 0;
 };

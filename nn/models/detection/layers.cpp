@@ -59,6 +59,15 @@ Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefi
   return Conv2dWeights::pack(w.data(), b.data(), p);
 }
 
+int add_conv_row(Profiler* prof, const std::string& layer, const Conv2dWeights& w, const Shape& out) {
+  if (!prof) return -1;
+  const Conv2dParams& p = w.params();
+  std::string op = "conv " + std::to_string(p.kh) + "x" + std::to_string(p.kw);
+  if (p.stride_h > 1) op += "/" + std::to_string(p.stride_h);
+  if (w.is_winograd()) op += " winograd";
+  return prof->add(layer, op, nchw_str(out), 2.0 * out.count() * p.cin * p.kh * p.kw);
+}
+
 void ConvScratch::require(const Conv2dWeights& w, int out_w) {
   per_thread_ = std::max(per_thread_, conv2d_scratch_floats(w, out_w));
 }

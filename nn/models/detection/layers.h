@@ -10,6 +10,7 @@
 #include "nn/buffer.h"
 #include "nn/conv2d.h"
 #include "nn/dwconv.h"
+#include "nn/profiler.h"
 #include "nn/tensor.h"
 #include "weights/safetensors.h"
 #include "weights/tensor_spec.h"
@@ -41,6 +42,10 @@ DwConvWeights load_dwconv_bn(const weights::SafeTensors& st, const std::string& 
                              const std::string& bn_prefix, int channels, const DwConvParams& p, float eps);
 // Conv with its own bias: `prefix` + "weight" / "bias".
 Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefix, const Conv2dParams& p);
+
+// A profiler row for a convolution producing `out` ("conv 3x3/2", "conv 3x3 winograd"),
+// counting the direct form's multiply-adds; -1 when prof is null.
+int add_conv_row(Profiler* prof, const std::string& layer, const Conv2dWeights& w, const Shape& out);
 
 // Thread-shared im2col scratch for every conv2d of a model, sized by the largest need.
 class ConvScratch {

@@ -4,6 +4,7 @@
 
 #include "nn/activation.h"
 #include "nn/error.h"
+#include "nn/channel_scale.h"
 #include "nn/pool.h"
 
 namespace nn::detection {
@@ -114,31 +115,43 @@ MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const s
 // torchvision's return_layers: the FPN reads the output of features[13] (block index 12).
 constexpr std::size_t kC13Block = 12;
 
-void MobileNetV3Backbone::plan(int h, int w) {
+void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
+  prof_ = prof;
   std::size_t a_max = 0, b_max = 0, pp_max = 0;
   auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   grow(pp_max, s);
+  row_stem_ = add_conv_row(prof, "0", stem_, s);
   scratch_ = ConvScratch();
   scratch_.require(stem_, s.w);
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
+    const std::string name = std::to_string(i + 1) + ".";
     if (b.has_expand) {
       scratch_.require(b.expand, s.w);
       b.a = {1, s.h, s.w, b.exp};
       grow(a_max, b.a);
+      b.row_expand = add_conv_row(prof, name + "expand", b.expand, b.a);
     }
     s = dwconv_output_shape({1, s.h, s.w, b.exp}, b.dw.params());
     b.b = s;
     grow(b_max, s);
+    if (prof) {
+      const DwConvParams& d = b.dw.params();
+      b.row_dw = prof->add(name + "dw", "dwconv " + std::to_string(d.kh) + "x" + std::to_string(d.kw) + "/" +
+                                            std::to_string(d.stride_h),
+                           nchw_str(s), 2.0 * s.count() * d.kh * d.kw);
+    }
     if (b.se) {
       b.pooled.resize({1, 1, 1, b.exp});
       b.squeezed.resize({1, 1, 1, b.se});
       b.excited.resize({1, 1, 1, b.exp});
+      if (prof) b.row_se = prof->add(name + "se", "squeeze-excitation", nchw_str(s), 0);
     }
     scratch_.require(b.project, s.w);
     s.c = b.cout;
     b.out = s;
+    b.row_project = add_conv_row(prof, name + "project", b.project, s);
     if (i == kC13Block) c13_out_.resize(s);
     else grow(pp_max, s);
   }
@@ -148,6 +161,7 @@ void MobileNetV3Backbone::plan(int h, int w) {
   for (auto& buf : pingpong_) buf.resize(pp_max);
   scratch_.require(last_, s.w);
   last_out_.resize({1, s.h, s.w, kLast});
+  row_last_ = add_conv_row(prof, "16", last_, last_out_.shape);
   scratch_.allocate();
   outs_.reserve(2);
 }
@@ -155,13 +169,18 @@ void MobileNetV3Backbone::plan(int h, int w) {
 void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const TensorView& out) {
   ConstTensorView x = in;
   if (b.has_expand) {
+    Profiler::Scope t(prof_, b.row_expand);
     const TensorView a{tmp_a_.data(), b.a};
     conv2d(x, b.expand, a, scratch_.get(), b.act);
     x = a;
   }
   const TensorView mid{tmp_b_.data(), b.b};
-  dwconv(x, b.dw, mid);
+  {
+    Profiler::Scope t(prof_, b.row_dw);
+    dwconv(x, b.dw, mid);
+  }
   if (b.se) {
+    Profiler::Scope t(prof_, b.row_se);
     // Squeeze-excitation: hardsigmoid(fc2(relu(fc1(mean)))) scales every pixel.
     global_avg_pool(mid, b.pooled.view());
     GemmEpilogue e1;
@@ -170,18 +189,18 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const T
     GemmEpilogue e2;
     e2.bias = b.fc2_bias.data(), e2.act = Act::HardSigmoid;
     gemm(1, b.squeezed.data.data(), b.se, b.fc2, b.excited.data.data(), b.exp, e2);
-    const float* sc = b.excited.data.data();
-    float* d = mid.data;
-    const std::size_t pixels = ConstTensorView(mid).pixels();
-    for (std::size_t px = 0; px < pixels; ++px)
-      for (int c = 0; c < b.exp; ++c) d[px * b.exp + c] *= sc[c];
+    scale_channels(mid, b.excited.data.data());
   }
+  Profiler::Scope t(prof_, b.row_project);
   conv2d(mid, b.project, out, scratch_.get(), Act::None, b.residual ? in.data : nullptr);
 }
 
 const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTensorView& in) {
   const TensorView stem_out{pingpong_[0].data(), stem_shape_};
-  conv2d(in, stem_, stem_out, scratch_.get(), Act::HardSwish);
+  {
+    Profiler::Scope t(prof_, row_stem_);
+    conv2d(in, stem_, stem_out, scratch_.get(), Act::HardSwish);
+  }
   ConstTensorView x = stem_out;
   int next = 1;  // the ping-pong buffer the next block writes (never x's)
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
@@ -190,7 +209,10 @@ const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTens
     x = out;
     if (i != kC13Block) next ^= 1;
   }
-  conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
+  {
+    Profiler::Scope t(prof_, row_last_);
+    conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
+  }
   outs_.assign({c13_out_.cview(), last_out_.cview()});
   return outs_;
 }

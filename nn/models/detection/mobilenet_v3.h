@@ -19,7 +19,7 @@ class MobileNetV3Backbone : public Backbone {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix);
   std::vector<int> out_channels() const override { return {160, 960}; }
 
-  void plan(int h, int w) override;
+  void plan(int h, int w, Profiler* layers) override;
   // in: {1, h, w, 3}. Returns views of the two outputs (valid until the next call).
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 
@@ -34,6 +34,7 @@ class MobileNetV3Backbone : public Backbone {
     AlignedBuffer fc1_bias, fc2_bias;
     Shape a, b, out;  // planned outputs of expand, depthwise, project
     Activation pooled, squeezed, excited;
+    int row_expand = -1, row_dw = -1, row_se = -1, row_project = -1;  // profiler rows
   };
   void run_block(Block& blk, const ConstTensorView& in, const TensorView& out);
 
@@ -47,6 +48,8 @@ class MobileNetV3Backbone : public Backbone {
   Activation c13_out_, last_out_;
   ConvScratch scratch_;
   std::vector<ConstTensorView> outs_;
+  Profiler* prof_ = nullptr;
+  int row_stem_ = -1, row_last_ = -1;
 };
 
 }  // namespace nn::detection

@@ -62,15 +62,18 @@ ResNet50Backbone::ResNet50Backbone(const weights::SafeTensors& st, const std::st
   });
 }
 
-void ResNet50Backbone::plan(int h, int w) {
+void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
+  prof_ = prof;
   scratch_ = ConvScratch();
   std::size_t a_max = 0, b_max = 0, id_max = 0, pp_max = 0;
   auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   scratch_.require(stem_, s.w);
   grow(pp_max, s);
+  row_stem_ = add_conv_row(prof, "conv1", stem_, s);
   s = max_pool2d_output_shape(s, MaxPoolParams{});
   pooled_.resize(s);
+  if (prof) row_pool_ = prof->add("maxpool", "max pool 3x3/2", nchw_str(s), 0);
   layer_out_.resize(layers_.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     for (std::size_t i = 0; i < layers_[l].size(); ++i) {
@@ -81,6 +84,11 @@ void ResNet50Backbone::plan(int h, int w) {
       grow(a_max, b.a);
       grow(b_max, b.b);
       if (b.has_downsample) grow(id_max, conv2d_output_shape(s, b.downsample.params()));
+      const std::string name = "layer" + std::to_string(l + 1) + "." + std::to_string(i) + ".";
+      b.row1 = add_conv_row(prof, name + "conv1", b.conv1, b.a);
+      b.row2 = add_conv_row(prof, name + "conv2", b.conv2, b.b);
+      if (b.has_downsample) b.row_down = add_conv_row(prof, name + "downsample", b.downsample, b.out);
+      b.row3 = add_conv_row(prof, name + "conv3", b.conv3, b.out);
       if (i + 1 < layers_[l].size()) grow(pp_max, b.out);
       scratch_.require(b.conv1, b.a.w);
       scratch_.require(b.conv2, b.b.w);
@@ -100,8 +108,14 @@ void ResNet50Backbone::plan(int h, int w) {
 
 const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorView& in) {
   const TensorView stem_out{pingpong_[0].data(), stem_shape_};
-  conv2d(in, stem_, stem_out, scratch_.get(), Act::Relu);
-  max_pool2d(ConstTensorView(stem_out.data, stem_out.shape), MaxPoolParams{}, pooled_.view());
+  {
+    Profiler::Scope t(prof_, row_stem_);
+    conv2d(in, stem_, stem_out, scratch_.get(), Act::Relu);
+  }
+  {
+    Profiler::Scope t(prof_, row_pool_);
+    max_pool2d(ConstTensorView(stem_out.data, stem_out.shape), MaxPoolParams{}, pooled_.view());
+  }
   ConstTensorView x = pooled_.cview();
   int next = 0;  // the ping-pong buffer the next inner block writes (never x's)
   outs_.clear();
@@ -109,17 +123,27 @@ const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorV
     for (std::size_t i = 0; i < layers_[l].size(); ++i) {
       Bottleneck& b = layers_[l][i];
       const TensorView a{tmp_a_.data(), b.a}, mid{tmp_b_.data(), b.b};
-      conv2d(x, b.conv1, a, scratch_.get(), Act::Relu);
-      conv2d(ConstTensorView(a.data, a.shape), b.conv2, mid, scratch_.get(), Act::Relu);
+      {
+        Profiler::Scope t(prof_, b.row1);
+        conv2d(x, b.conv1, a, scratch_.get(), Act::Relu);
+      }
+      {
+        Profiler::Scope t(prof_, b.row2);
+        conv2d(ConstTensorView(a.data, a.shape), b.conv2, mid, scratch_.get(), Act::Relu);
+      }
       const float* identity = x.data;
       if (b.has_downsample) {
+        Profiler::Scope t(prof_, b.row_down);
         conv2d(x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
         identity = tmp_identity_.data();
       }
       const bool last = i + 1 == layers_[l].size();
       const TensorView out = last ? layer_out_[l].view() : TensorView{pingpong_[next].data(), b.out};
-      // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
-      conv2d(ConstTensorView(mid.data, mid.shape), b.conv3, out, scratch_.get(), Act::Relu, identity, true);
+      {
+        // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
+        Profiler::Scope t(prof_, b.row3);
+        conv2d(ConstTensorView(mid.data, mid.shape), b.conv3, out, scratch_.get(), Act::Relu, identity, true);
+      }
       x = ConstTensorView(out.data, out.shape);
       if (!last) next ^= 1;
     }

@@ -18,7 +18,7 @@ class ResNet50Backbone : public Backbone {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix);
 
   std::vector<int> out_channels() const override { return {256, 512, 1024, 2048}; }
-  void plan(int h, int w) override;
+  void plan(int h, int w, Profiler* layers) override;
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 
  private:
@@ -26,6 +26,7 @@ class ResNet50Backbone : public Backbone {
     Conv2dWeights conv1, conv2, conv3, downsample;
     bool has_downsample = false;
     Shape a, b, out;  // planned output shapes of conv1, conv2, conv3 (= downsample's)
+    int row1 = -1, row2 = -1, row3 = -1, row_down = -1;  // profiler rows
   };
   Conv2dWeights stem_;
   Shape stem_shape_;
@@ -39,6 +40,8 @@ class ResNet50Backbone : public Backbone {
   std::vector<std::vector<Bottleneck>> layers_;
   ConvScratch scratch_;
   std::vector<ConstTensorView> outs_;
+  Profiler* prof_ = nullptr;
+  int row_stem_ = -1, row_pool_ = -1;
 };
 
 }  // namespace nn::detection

@@ -5,6 +5,9 @@
 #include <cstring>
 #include <vector>
 
+#include "nn/isa.h"
+#include "nn/models/detection/roi_align_bin.h"
+
 namespace nn::detection {
 
 namespace {
@@ -43,6 +46,8 @@ Sample sample_at(float y, float x, int height, int width) {
 
 }  // namespace
 
+void roi_bin_scalar(const RoiBin& b) { roi_bin_with<float>(b); }
+
 void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const RoiAlignParams& p, float* out) {
   const int height = feature.shape.h, width = feature.shape.w, channels = feature.shape.c;
   const float* base = feature.pixel(n, 0, 0);
@@ -60,13 +65,20 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   const int grid_h = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_h / p.out_h));
   const int grid_w = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_w / p.out_w));
   const float count = static_cast<float>(std::max(grid_h * grid_w, 1));
-  // The models' fixed sampling ratio fits on the stack; only adaptive sampling of
-  // large RoIs needs the heap.
   const std::size_t sample_count = static_cast<std::size_t>(grid_h) * grid_w;
-  Sample on_stack[16];
+  // Grids of up to kRoiBinMaxSamples samples (the models' fixed 2 x 2) go through the
+  // ISA's bin kernel; only adaptive sampling of large RoIs needs the heap and the
+  // scalar kernel, bin by bin on the same arithmetic.
+  void (*bin_kernel)(const RoiBin&) = roi_bin_scalar;
+  if (active_isa() == Isa::Avx512) bin_kernel = roi_bin_avx512;
+  else if (active_isa() == Isa::Avx2) bin_kernel = roi_bin_avx2;
+  Sample on_stack[kRoiBinMaxSamples];
   std::vector<Sample> on_heap;
   Sample* samples = on_stack;
-  if (sample_count > 16) on_heap.resize(sample_count), samples = on_heap.data();
+  if (sample_count > kRoiBinMaxSamples) on_heap.resize(sample_count), samples = on_heap.data();
+  RoiBin bin;
+  bin.channels = channels;
+  bin.count = count;
   for (int ph = 0; ph < p.out_h; ++ph)
     for (int pw = 0; pw < p.out_w; ++pw) {
       std::size_t k = 0;
@@ -79,6 +91,21 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
       }
       // Channels innermost (NHWC): per channel the samples still add in torchvision's order.
       float* o = out + (static_cast<std::size_t>(ph) * p.out_w + pw) * channels;
+      bin.out = o;
+      if (sample_count <= kRoiBinMaxSamples) {
+        for (std::size_t s = 0; s < sample_count; ++s) {
+          const Sample& sm = samples[s];
+          const int px[4] = {sm.p1, sm.p2, sm.p3, sm.p4};
+          const float w[4] = {sm.w1, sm.w2, sm.w3, sm.w4};
+          for (int j = 0; j < 4; ++j) {
+            bin.v[4 * s + j] = base + static_cast<std::size_t>(px[j]) * channels;
+            bin.w[4 * s + j] = w[j];
+          }
+        }
+        bin.samples = static_cast<int>(sample_count);
+        bin_kernel(bin);
+        continue;
+      }
       std::fill(o, o + channels, 0.0f);
       for (std::size_t k2 = 0; k2 < sample_count; ++k2) {
         const Sample& s = samples[k2];

@@ -71,7 +71,18 @@ RoiHeads::RoiHeads(const weights::SafeTensors& st, const std::string& p, const R
   copy_to(predictor_bias_, b);
 }
 
-void RoiHeads::plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois) {
+void RoiHeads::plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois, Profiler* prof) {
+  prof_ = prof;
+  if (prof) {
+    // Work at max_rois RoIs (what the RPN returns at most).
+    const double r = std::max(1, max_rois), in = kChannels * kPool * kPool;
+    const std::string shape = "[" + std::to_string(std::max(1, max_rois)) + ", " + std::to_string(hidden_) + "]";
+    row_pool_ = prof->add("roi_heads.box_roi_pool", "RoIAlign 7x7, 2x2 samples", "", 0);
+    row_fc6_ = prof->add("roi_heads.box_head.fc6", "linear + relu", shape, 2.0 * r * in * hidden_);
+    row_fc7_ = prof->add("roi_heads.box_head.fc7", "linear + relu", shape, 2.0 * r * hidden_ * hidden_);
+    row_predictor_ = prof->add("roi_heads.box_predictor", "linear (scores, deltas)", "", 2.0 * r * hidden_ * 5 * classes_);
+    row_post_ = prof->add("roi_heads.postprocess", "softmax, decode, NMS, top-k", "", 0);
+  }
   scales_.clear();
   for (const Shape& s : pooled) scales_.push_back(infer_scale(s.h, sizes.resized_h));
   k_min_ = static_cast<int>(-std::log2(scales_.front()));
@@ -105,6 +116,7 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
   RoiAlignParams rp;
   rp.out_h = rp.out_w = kPool;
   rp.sampling_ratio = 2;
+  Profiler::Scope t_pool(prof_, row_pool_);
 #ifdef ROADNN_OPENMP
 #pragma omp parallel for schedule(static)
 #endif
@@ -120,16 +132,27 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
     p.spatial_scale = scales_[level];
     roi_align_one(pooled[level], 0, b, p, features_.data() + i * per_roi);
   }
-  GemmEpilogue e6;
-  e6.bias = fc6_bias_.data(), e6.act = Act::Relu;
-  gemm_parallel(r, features_.data(), static_cast<std::ptrdiff_t>(per_roi), fc6_, h6_.data(), hidden_, e6);
-  GemmEpilogue e7;
-  e7.bias = fc7_bias_.data(), e7.act = Act::Relu;
-  gemm_parallel(r, h6_.data(), hidden_, fc7_, h7_.data(), hidden_, e7);
-  GemmEpilogue ep;
-  ep.bias = predictor_bias_.data();
+  t_pool.stop();
+  {
+    Profiler::Scope t(prof_, row_fc6_);
+    GemmEpilogue e6;
+    e6.bias = fc6_bias_.data(), e6.act = Act::Relu;
+    gemm_parallel(r, features_.data(), static_cast<std::ptrdiff_t>(per_roi), fc6_, h6_.data(), hidden_, e6);
+  }
+  {
+    Profiler::Scope t(prof_, row_fc7_);
+    GemmEpilogue e7;
+    e7.bias = fc7_bias_.data(), e7.act = Act::Relu;
+    gemm_parallel(r, h6_.data(), hidden_, fc7_, h7_.data(), hidden_, e7);
+  }
   const int c = classes_;
-  gemm_parallel(r, h7_.data(), hidden_, predictor_, logits_.data(), 5 * c, ep);
+  {
+    Profiler::Scope t(prof_, row_predictor_);
+    GemmEpilogue ep;
+    ep.bias = predictor_bias_.data();
+    gemm_parallel(r, h7_.data(), hidden_, predictor_, logits_.data(), 5 * c, ep);
+  }
+  Profiler::Scope t_post(prof_, row_post_);
 
   boxes_.clear(), scores_.clear(), labels_.clear();
   const BoxCoderWeights weights{10.0f, 10.0f, 5.0f, 5.0f};

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "nn/gemm.h"
+#include "nn/profiler.h"
 #include "nn/models/detection/box_ops.h"
 #include "nn/models/detection/layers.h"
 #include "nn/models/detection/transform.h"
@@ -38,8 +39,10 @@ class RoiHeads {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, int classes, int hidden = 1024);
   int num_classes() const { return classes_; }
 
-  // pooled: the maps the RoI pooler may sample (torchvision's '0'..'3' present).
-  void plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois);
+  // pooled: the maps the RoI pooler may sample (torchvision's '0'..'3' present). Rows
+  // for RoIAlign, fc6, fc7, the predictor and the post-processing go into `layers`
+  // (may be null).
+  void plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, int max_rois, Profiler* layers = nullptr);
   // The result stays valid until the next forward; no allocation once planned.
   const Detections& forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
                             const ImageSizes& sizes);
@@ -58,6 +61,8 @@ class RoiHeads {
   std::vector<int> labels_, keep_;
   NmsWorkspace nms_;
   Detections result_;
+  Profiler* prof_ = nullptr;
+  int row_pool_ = -1, row_fc6_ = -1, row_fc7_ = -1, row_predictor_ = -1, row_post_ = -1;
 };
 
 }  // namespace nn::detection
