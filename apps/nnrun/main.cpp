@@ -16,6 +16,7 @@
 #include "apps/nnrun/runner.h"
 #include "nn/isa.h"
 #include "nn/threads.h"
+#include "nn/winograd.h"
 #include "weights/safetensors.h"
 
 namespace nnrun {
@@ -67,7 +68,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string model, weights_path, input_path, output_path, isa_name, precision_name;
+  std::string model, weights_path, input_path, output_path, isa_name, precision_name, conv3x3;
   int threads = 0, repeat = 0;
   bool profile = false, quiet = false, dump_proposals = false;
 
@@ -86,6 +87,10 @@ int main(int argc, char** argv) {
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
   args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
   args.option("precision", "P", std::string("ConvNeXt models: ") + apps::kPrecisionHelp, &precision_name);
+  args.option("conv3x3", "ALGO", "3x3 stride-1 convolutions (detectors): winograd (default; F(4x4,3x3), a quarter\n"
+              "                            of the multiply-adds) or direct (im2col; rounds as closely to PyTorch as the\n"
+              "                            other layers). The environment's NN_WINOGRAD=0 also selects direct",
+              &conv3x3);
   args.flag("dump-proposals", "detectors: also write the RPN proposals ('proposals' [P,4], 'proposal_scores' [P],\n"
             "                            in the pixels of the resized image 'proposal_image_size' [2] = H,W)",
             &dump_proposals);
@@ -109,6 +114,10 @@ int main(int argc, char** argv) {
       args.fail(std::string("--isa ") + isa_name + ": this CPU supports at most " + nn::isa_name(nn::detect_isa()));
     nn::set_isa(isa);
   }
+  if (!conv3x3.empty()) {
+    if (conv3x3 != "winograd" && conv3x3 != "direct") args.fail("--conv3x3 must be winograd or direct");
+    nn::set_winograd(conv3x3 == "winograd");
+  }
   nn::set_num_threads(threads);
   nnrun::RunOptions options;
   options.precision = apps::precision_option(args, precision_name);
@@ -130,8 +139,9 @@ int main(int argc, char** argv) {
       runner->prepare(x);
     }
     if (!quiet)
-      std::fprintf(stderr, "nnrun: %s: %s; kernels %s, %d threads\n", model.c_str(), runner->describe().c_str(),
-                   nn::isa_name(nn::active_isa()), nn::num_threads());
+      std::fprintf(stderr, "nnrun: %s: %s; kernels %s, %d threads%s\n", model.c_str(), runner->describe().c_str(),
+                   nn::isa_name(nn::active_isa()), nn::num_threads(),
+                   nn::winograd_enabled() ? "" : ", 3x3 convolutions direct");
 
     runner->forward();
     weights::Writer out;

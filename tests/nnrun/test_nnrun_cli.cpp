@@ -19,6 +19,7 @@
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
+#include "nn/winograd.h"
 #include "weights/safetensors.h"
 
 namespace {
@@ -349,6 +350,41 @@ TEST_F(NnrunCli, DetectorWritesDetectionsAndProposals) {
   r = run("w.safetensors", "x.safetensors", "--dump-proposals");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--dump-proposals"), std::string::npos) << r.err;
+  EXPECT_FALSE(output_exists());
+}
+
+// --conv3x3 direct runs the model the library packs with set_winograd(false), bit for
+// bit; an unknown algorithm is a usage error.
+TEST_F(NnrunCli, Conv3x3DirectIsTheLibrarysDirectModel) {
+  namespace det = nn::detection;
+  const auto v = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
+  write("det.safetensors", nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 4).bytes());
+  const int h = 90, w = 130;
+  std::vector<float> x(3 * h * w);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 2654435761u) % 1000) / 999.0f;
+  weights::Writer in;
+  in.add_f32("input", {1, 3, h, w}, x.data());
+  in.write(path("img.safetensors"));
+
+  Result r = run("det.safetensors", "img.safetensors", "--conv3x3 direct", det::faster_rcnn_name(v));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("3x3 convolutions direct"), std::string::npos) << r.err;
+  auto y = weights::SafeTensors::load(path("y.safetensors"));
+  const bool saved = nn::winograd_enabled();
+  nn::set_winograd(false);
+  det::FasterRcnn model(weights::SafeTensors::load(path("det.safetensors")), v);
+  nn::set_winograd(saved);
+  model.plan(h, w);
+  const det::Detections d = model.forward(x.data());
+  ASSERT_GT(d.boxes.size(), 0u);
+  ASSERT_EQ(y.info("boxes").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(d.boxes.size()), 4}));
+  EXPECT_EQ(0, std::memcmp(y.f32("boxes").data(), d.boxes.data(), d.boxes.size() * sizeof(det::Box)));
+  EXPECT_EQ(y.f32("scores"), d.scores);
+  std::remove(path("y.safetensors").c_str());
+
+  r = run("det.safetensors", "img.safetensors", "--conv3x3 fft", det::faster_rcnn_name(v));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--conv3x3 must be winograd or direct"), std::string::npos) << r.err;
   EXPECT_FALSE(output_exists());
 }
 
