@@ -14,20 +14,14 @@
 #include "nn/conv2d.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
+#include "tests/nn/random_data.h"
 
 namespace {
 
+using nntest::random_symmetric;
 using nn::Act;
 using nn::Conv2dParams;
 using nn::Shape;
-
-std::vector<float> random_vector(std::size_t n, unsigned seed, float scale = 1.0f) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(-scale, scale);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
 
 Conv2dParams conv(int cin, int cout, int k, int stride, int pad) {
   Conv2dParams p;
@@ -79,12 +73,12 @@ TEST_P(Conv2dTest, MatchesReferenceAndIsThreadCountIndependent) {
   for (const Case& c : cases) {
     SCOPED_TRACE(label(c));
     const Conv2dParams& p = c.p;
-    const std::vector<float> x = random_vector(c.in.count(), seed++);
-    const std::vector<float> wt = random_vector(static_cast<std::size_t>(p.cout) * p.cin * p.kh * p.kw, seed++,
+    const std::vector<float> x = random_symmetric(c.in.count(), seed++);
+    const std::vector<float> wt = random_symmetric(static_cast<std::size_t>(p.cout) * p.cin * p.kh * p.kw, seed++,
                                                 1.0f / std::sqrt(static_cast<float>(p.cin * p.kh * p.kw)));
-    const std::vector<float> b = random_vector(p.cout, seed++, 0.1f);
+    const std::vector<float> b = random_symmetric(p.cout, seed++, 0.1f);
     const Shape os = nn::conv2d_output_shape(c.in, p);
-    const std::vector<float> res = random_vector(os.count(), seed++);
+    const std::vector<float> res = random_symmetric(os.count(), seed++);
     const nn::Conv2dWeights w = nn::Conv2dWeights::pack(wt.data(), b.data(), p);
 
     // Reference: conv without activation, then residual, then the activation.

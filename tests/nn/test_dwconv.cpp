@@ -13,20 +13,14 @@
 #include "nn/error.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
+#include "tests/nn/random_data.h"
 
 namespace {
 
+using nntest::random_vector;
 using nn::Act;
 using nn::DwConvParams;
 using nn::Shape;
-
-std::vector<float> random_vector(std::size_t n, unsigned seed, float lo = -1.0f, float hi = 1.0f) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(lo, hi);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
 
 DwConvParams make(int kh, int kw, int s, int ph, int pw, Act act = Act::None) {
   DwConvParams p;

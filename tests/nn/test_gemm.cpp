@@ -17,6 +17,7 @@
 #include "nn/gemm_kernels.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
+#include "tests/nn/random_data.h"
 
 #ifdef ROADNN_OPENMP
 #include <omp.h>
@@ -24,20 +25,13 @@
 
 namespace {
 
+using nntest::random_vector;
 using nn::Act;
 using nn::GemmEpilogue;
 using nn::GemmWeights;
 
 constexpr Act kActs[] = {Act::None, Act::Relu, Act::Gelu, Act::HardSwish, Act::HardSigmoid,
                          Act::Sigmoid};
-
-std::vector<float> random_vector(std::size_t n, unsigned seed, float lo = -1.0f, float hi = 1.0f) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(lo, hi);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
 
 // A packed GEMM under test: one float micro-kernel of the list, or the bf16 GEMM. The
 // bf16 GEMM's tests draw A and W already representable in bfloat16, so its rounding is

@@ -12,16 +12,11 @@
 #include "nn/layernorm.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
+#include "tests/nn/random_data.h"
 
 namespace {
 
-std::vector<float> random_vector(std::size_t n, unsigned seed, float lo, float hi) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(lo, hi);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
+using nntest::random_vector;
 
 class LayerNormTest : public testing::TestWithParam<nn::Isa> {};
 

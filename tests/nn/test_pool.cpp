@@ -13,17 +13,12 @@
 #include "nn/pool.h"
 #include "nn/threads.h"
 
+#include "tests/nn/random_data.h"
+
 namespace {
 
+using nntest::random_vector;
 using nn::Shape;
-
-std::vector<float> random_vector(std::size_t n, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(-3.0f, 4.0f);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
 
 TEST(MeanOverRows, SumsRowsInOrderThenDividesLikeAvgPool2d) {
   // F.avg_pool2d(x, (3, 1)) on rows [1e8, 0.1, 3], [1, 0.2, 1e-8], [-1e8, 0.3, -3]
@@ -40,7 +35,7 @@ TEST(MeanOverRows, SumsRowsInOrderThenDividesLikeAvgPool2d) {
 TEST(MeanOverRows, MatchesSequentialSumOnAwkwardShapes) {
   for (const Shape& s : {Shape{2, 1, 1, 1}, Shape{2, 7, 13, 17}, Shape{1, 40, 61, 100},
                          Shape{3, 9, 300, 33}}) {
-    const std::vector<float> x = random_vector(s.count(), s.h * 7 + s.c);
+    const std::vector<float> x = random_vector(s.count(), s.h * 7 + s.c, -3.0f, 4.0f);
     std::vector<float> y(static_cast<std::size_t>(s.n) * s.w * s.c);
     for (int threads : {1, 2}) {
       const int saved = nn::num_threads();
@@ -93,7 +88,7 @@ TEST(MaxPool2d, MatchesNaiveLoops) {
     for (const Shape& s : {Shape{2, 1, 1, 3}, Shape{2, 7, 13, 17}, Shape{1, 9, 29, 64}, Shape{2, 2, 6, 5}}) {
       if (s.h + 2 * p.pad_h < p.kh || s.w + 2 * p.pad_w < p.kw) continue;
       const nn::Shape os = nn::max_pool2d_output_shape(s, p);
-      const std::vector<float> x = random_vector(s.count(), s.w + s.c);
+      const std::vector<float> x = random_vector(s.count(), s.w + s.c, -3.0f, 4.0f);
       std::vector<float> y(os.count());
       nn::max_pool2d(nn::ConstTensorView(x.data(), s), p, nn::TensorView{y.data(), os});
       EXPECT_EQ(os.h, (s.h + 2 * p.pad_h - p.kh) / p.stride_h + 1);
@@ -142,7 +137,7 @@ TEST(MaxPool2d, BadParametersThrow) {
 TEST(GlobalAvgPool, WithinHalfAnUlpOfTheExactMeanAndThreadCountIndependent) {
   for (const Shape& s : {Shape{2, 1, 1, 5}, Shape{2, 7, 13, 17}, Shape{1, 23, 40, 960}, Shape{3, 2, 3, 300},
                          Shape{1, 96, 168, 72}}) {
-    const std::vector<float> x = random_vector(s.count(), s.c);
+    const std::vector<float> x = random_vector(s.count(), s.c, -3.0f, 4.0f);
     std::vector<float> y(static_cast<std::size_t>(s.n) * s.c), first;
     for (int threads : {1, 2, 3}) {
       const int saved = nn::num_threads();

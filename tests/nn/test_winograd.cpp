@@ -19,19 +19,13 @@
 #include "nn/winograd.h"
 #include "nn/winograd_kernel.h"
 #include "tests/nn/isa_param.h"
+#include "tests/nn/random_data.h"
 
 namespace {
 
+using nntest::random_symmetric;
 using nn::Act;
 using nn::Shape;
-
-std::vector<float> random_vector(std::size_t n, unsigned seed, float scale = 1.0f) {
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> dist(-scale, scale);
-  std::vector<float> v(n);
-  for (auto& x : v) x = dist(gen);
-  return v;
-}
 
 nn::Conv2dParams conv3x3(int cin, int cout) {
   nn::Conv2dParams p;
@@ -64,7 +58,7 @@ TEST(WinogradTransforms, InputTransformMatchesScalarBitwise) {
   for (const IsaKernels& k : simd_kernels()) {
     for (int c : kChannels) {
       SCOPED_TRACE(std::string(nn::isa_name(k.isa)) + " c " + std::to_string(c));
-      const std::vector<float> patch = random_vector(36 * static_cast<std::size_t>(c), c, 3.0f);
+      const std::vector<float> patch = random_symmetric(36 * static_cast<std::size_t>(c), c, 3.0f);
       const std::vector<float> zero(c, 0.0f);
       const std::ptrdiff_t stride = c + 5;  // rows of V further apart than c
       std::vector<float> want(36 * stride, -1.0f), got(want.size(), -1.0f);
@@ -87,9 +81,9 @@ TEST(WinogradTransforms, OutputTransformMatchesScalarBitwise) {
       for (int mode = 0; mode < 3; ++mode) {  // plain, relu before residual, relu after it
         SCOPED_TRACE(std::string(nn::isa_name(k.isa)) + " c " + std::to_string(c) + " mode " + std::to_string(mode));
         const std::ptrdiff_t stride = c + 3;
-        const std::vector<float> m = random_vector(36 * stride, 100 + c, 2.0f);
-        const std::vector<float> bias = random_vector(c, 200 + c, 0.5f);
-        const std::vector<float> res = random_vector(16 * static_cast<std::size_t>(c), 300 + c);
+        const std::vector<float> m = random_symmetric(36 * stride, 100 + c, 2.0f);
+        const std::vector<float> bias = random_symmetric(c, 200 + c, 0.5f);
+        const std::vector<float> res = random_symmetric(16 * static_cast<std::size_t>(c), 300 + c);
         std::vector<float> want(16 * static_cast<std::size_t>(c), -7.0f), got(want.size(), -7.0f);
         nn::WinogradOutputTile t;
         t.m = m.data();
@@ -160,12 +154,12 @@ TEST_P(WinogradConvTest, MatchesReferenceAndIsThreadCountIndependent) {
     SCOPED_TRACE(label(c));
     const nn::Conv2dParams p = conv3x3(c.in.c, c.cout);
     ASSERT_TRUE(nn::conv2d_winograd_applies(p));
-    const std::vector<float> x = random_vector(c.in.count(), seed++);
-    const std::vector<float> wt = random_vector(static_cast<std::size_t>(p.cout) * p.cin * 9, seed++,
+    const std::vector<float> x = random_symmetric(c.in.count(), seed++);
+    const std::vector<float> wt = random_symmetric(static_cast<std::size_t>(p.cout) * p.cin * 9, seed++,
                                                 1.0f / std::sqrt(9.0f * p.cin));
-    const std::vector<float> b = random_vector(p.cout, seed++, 0.1f);
+    const std::vector<float> b = random_symmetric(p.cout, seed++, 0.1f);
     const Shape os{c.in.n, c.in.h, c.in.w, c.cout};
-    const std::vector<float> res = random_vector(os.count(), seed++);
+    const std::vector<float> res = random_symmetric(os.count(), seed++);
     const nn::Conv2dWeights w = nn::Conv2dWeights::pack(wt.data(), b.data(), p);
     ASSERT_TRUE(w.is_winograd());
 
@@ -213,8 +207,8 @@ TEST(Winograd, OnlyThreeByThreeStrideOnePadOneWithEnoughChannels) {
 TEST(Winograd, SwitchingOffPacksTheDirectForm) {
   const Case c{{1, 11, 9, 32}, 24, Act::Relu, false, false};
   const nn::Conv2dParams p = conv3x3(c.in.c, c.cout);
-  const std::vector<float> x = random_vector(c.in.count(), 5), wt = random_vector(24 * 32 * 9, 6, 0.06f);
-  const std::vector<float> b = random_vector(24, 7, 0.1f), res;
+  const std::vector<float> x = random_symmetric(c.in.count(), 5), wt = random_symmetric(24 * 32 * 9, 6, 0.06f);
+  const std::vector<float> b = random_symmetric(24, 7, 0.1f), res;
   const bool saved = nn::winograd_enabled();
   nn::set_winograd(false);
   const nn::Conv2dWeights direct = nn::Conv2dWeights::pack(wt.data(), b.data(), p);

@@ -84,6 +84,29 @@ class NnrunCli : public testing::Test {
     EXPECT_FALSE(output_exists());
   }
 
+  // A small detector's random weights (det.safetensors) and a 90x130 image
+  // (img.safetensors) for it; returns the image.
+  static constexpr auto kDetector = nn::detection::FasterRcnnVariant::MobileNetV3Large320Fpn;
+  static constexpr int kDetH = 90, kDetW = 130;
+  std::vector<float> write_detector_case() {
+    namespace det = nn::detection;
+    write("det.safetensors", nn::synthetic_weights(det::faster_rcnn_tensor_specs(kDetector, 3), 4).bytes());
+    std::vector<float> x(3 * kDetH * kDetW);
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 2654435761u) % 1000) / 999.0f;
+    weights::Writer in;
+    in.add_f32("input", {1, 3, kDetH, kDetW}, x.data());
+    in.write(path("img.safetensors"));
+    return x;
+  }
+
+  // nnrun's detections file holds exactly the library's detections.
+  static void expect_same_detections(const weights::SafeTensors& y, const nn::detection::Detections& d) {
+    ASSERT_EQ(y.info("boxes").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(d.boxes.size()), 4}));
+    EXPECT_EQ(0, std::memcmp(y.f32("boxes").data(), d.boxes.data(), d.boxes.size() * sizeof(nn::detection::Box)));
+    EXPECT_EQ(y.f32("scores"), d.scores);
+    EXPECT_EQ(y.i64("labels"), d.labels);
+  }
+
   // The header JSON of the good weights file, for targeted edits.
   std::string header() const {
     std::uint64_t n = 0;
@@ -315,14 +338,9 @@ TEST_F(NnrunCli, HelpListsModels) {
 // the library computes for the same weights and image.
 TEST_F(NnrunCli, DetectorWritesDetectionsAndProposals) {
   namespace det = nn::detection;
-  const auto v = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
-  write("det.safetensors", nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 4).bytes());
-  const int h = 90, w = 130;
-  std::vector<float> x(3 * h * w);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 2654435761u) % 1000) / 999.0f;
-  weights::Writer in;
-  in.add_f32("input", {1, 3, h, w}, x.data());
-  in.write(path("img.safetensors"));
+  const auto v = kDetector;
+  const int h = kDetH, w = kDetW;
+  const std::vector<float> x = write_detector_case();
 
   Result r = run("det.safetensors", "img.safetensors", "--dump-proposals", det::faster_rcnn_name(v));
   ASSERT_EQ(r.code, 0) << r.err;
@@ -338,10 +356,7 @@ TEST_F(NnrunCli, DetectorWritesDetectionsAndProposals) {
   EXPECT_EQ(0, std::memcmp(y.f32("proposals").data(), p.boxes.data(), p.boxes.size() * sizeof(det::Box)));
   EXPECT_EQ(y.f32("proposal_scores"), p.scores);
   EXPECT_EQ(y.i64("proposal_image_size"), (std::vector<std::int64_t>{model.sizes().resized_h, model.sizes().resized_w}));
-  ASSERT_EQ(y.info("boxes").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(d.boxes.size()), 4}));
-  EXPECT_EQ(0, std::memcmp(y.f32("boxes").data(), d.boxes.data(), d.boxes.size() * sizeof(det::Box)));
-  EXPECT_EQ(y.f32("scores"), d.scores);
-  EXPECT_EQ(y.i64("labels"), d.labels);
+  expect_same_detections(y, d);
 
   // Without the flag there are no proposals; a model without an RPN refuses the flag.
   ASSERT_EQ(run("det.safetensors", "img.safetensors", "", det::faster_rcnn_name(v)).code, 0);
@@ -357,14 +372,9 @@ TEST_F(NnrunCli, DetectorWritesDetectionsAndProposals) {
 // bit; an unknown algorithm is a usage error.
 TEST_F(NnrunCli, Conv3x3DirectIsTheLibrarysDirectModel) {
   namespace det = nn::detection;
-  const auto v = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
-  write("det.safetensors", nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 4).bytes());
-  const int h = 90, w = 130;
-  std::vector<float> x(3 * h * w);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 2654435761u) % 1000) / 999.0f;
-  weights::Writer in;
-  in.add_f32("input", {1, 3, h, w}, x.data());
-  in.write(path("img.safetensors"));
+  const auto v = kDetector;
+  const int h = kDetH, w = kDetW;
+  const std::vector<float> x = write_detector_case();
 
   Result r = run("det.safetensors", "img.safetensors", "--conv3x3 direct", det::faster_rcnn_name(v));
   ASSERT_EQ(r.code, 0) << r.err;
@@ -377,9 +387,7 @@ TEST_F(NnrunCli, Conv3x3DirectIsTheLibrarysDirectModel) {
   model.plan(h, w);
   const det::Detections d = model.forward(x.data());
   ASSERT_GT(d.boxes.size(), 0u);
-  ASSERT_EQ(y.info("boxes").shape, (std::vector<std::int64_t>{static_cast<std::int64_t>(d.boxes.size()), 4}));
-  EXPECT_EQ(0, std::memcmp(y.f32("boxes").data(), d.boxes.data(), d.boxes.size() * sizeof(det::Box)));
-  EXPECT_EQ(y.f32("scores"), d.scores);
+  expect_same_detections(y, d);
   std::remove(path("y.safetensors").c_str());
 
   r = run("det.safetensors", "img.safetensors", "--conv3x3 fft", det::faster_rcnn_name(v));
