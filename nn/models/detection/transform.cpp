@@ -9,6 +9,10 @@
 #include "nn/error.h"
 #include "nn/resize.h"
 
+#ifdef ROADNN_OPENMP
+#include <omp.h>
+#endif
+
 namespace nn::detection {
 
 ImageSizes transform_sizes(int h, int w, const TransformConfig& cfg) {
@@ -33,12 +37,23 @@ void transform_image(const float* image, const ImageSizes& s, const TransformCon
                      float* resized, const TensorView& out) {
   const std::size_t plane = static_cast<std::size_t>(s.orig_h) * s.orig_w;
   // (x - mean) / std per element, as torchvision's NCHW normalisation rounds it,
-  // written straight into NHWC for the resize kernel.
-  for (std::size_t i = 0; i < plane; ++i)
-    for (int c = 0; c < 3; ++c) normalised[i * 3 + c] = (image[c * plane + i] - cfg.mean[c]) / cfg.std[c];
+  // written straight into NHWC for the resize kernel; rows split over the team (each
+  // element is one subtraction and one division, so the split changes no bit).
+  const long long rows = s.orig_h;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static) if (!omp_in_parallel() && plane > 65536)
+#endif
+  for (long long y = 0; y < rows; ++y) {
+    const std::size_t i1 = static_cast<std::size_t>(y + 1) * s.orig_w;
+    for (std::size_t i = static_cast<std::size_t>(y) * s.orig_w; i < i1; ++i)
+      for (int c = 0; c < 3; ++c) normalised[i * 3 + c] = (image[c * plane + i] - cfg.mean[c]) / cfg.std[c];
+  }
   resize_bilinear(ConstTensorView(normalised, {1, s.orig_h, s.orig_w, 3}),
                   TensorView{resized, {1, s.resized_h, s.resized_w, 3}});
   const std::size_t row = static_cast<std::size_t>(s.resized_w) * 3;
+#ifdef ROADNN_OPENMP
+#pragma omp parallel for schedule(static) if (!omp_in_parallel() && out.count() > 65536)
+#endif
   for (int y = 0; y < out.shape.h; ++y) {
     float* dst = out.pixel(0, y, 0);
     const std::size_t copied = y < s.resized_h ? row : 0;
