@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <utility>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "nn/activation.h"
@@ -90,26 +90,27 @@ namespace {
 constexpr int kSmallCopy = 32;
 
 template <int N>
-void copy_n(float* d, const float* s) { std::memcpy(d, s, sizeof(float) * N); }
-template <int N>
-void zero_n(float* d, const float*) { std::memset(d, 0, sizeof(float) * N); }
-
-using SmallOp = void (*)(float*, const float*);
-template <template <int> class Op, int... I>
-constexpr std::array<SmallOp, sizeof...(I)> small_table(std::integer_sequence<int, I...>) {
-  return {&Op<I>::run...};
+struct Small {
+  static void copy(float* d, const float* s) { std::memcpy(d, s, sizeof(float) * N); }
+  static void zero(float* d) { std::memset(d, 0, sizeof(float) * N); }
+};
+template <int... N>
+constexpr std::array<void (*)(float*, const float*), sizeof...(N)> copy_table(std::integer_sequence<int, N...>) {
+  return {&Small<N>::copy...};
 }
-template <int N> struct CopyOp { static void run(float* d, const float* s) { copy_n<N>(d, s); } };
-template <int N> struct ZeroOp { static void run(float* d, const float* s) { zero_n<N>(d, s); } };
-constexpr auto kCopy = small_table<CopyOp>(std::make_integer_sequence<int, kSmallCopy + 1>{});
-constexpr auto kZero = small_table<ZeroOp>(std::make_integer_sequence<int, kSmallCopy + 1>{});
+template <int... N>
+constexpr std::array<void (*)(float*), sizeof...(N)> zero_table(std::integer_sequence<int, N...>) {
+  return {&Small<N>::zero...};
+}
+constexpr auto kCopy = copy_table(std::make_integer_sequence<int, kSmallCopy + 1>{});
+constexpr auto kZero = zero_table(std::make_integer_sequence<int, kSmallCopy + 1>{});
 
 inline void copy_floats(float* d, const float* s, int n) {
   if (n <= kSmallCopy) kCopy[n](d, s);
   else std::memcpy(d, s, sizeof(float) * n);
 }
 inline void zero_floats(float* d, int n) {
-  if (n <= kSmallCopy) kZero[n](d, nullptr);
+  if (n <= kSmallCopy) kZero[n](d);
   else std::memset(d, 0, sizeof(float) * n);
 }
 
@@ -129,7 +130,8 @@ void im2col_row(const ConstTensorView& in, const Conv2dParams& p, int n, int oy,
       const int kx_lo = std::min(p.kw, std::max(0, -ix0));
       const int kx_hi = std::max(kx_lo, std::min(p.kw, in.shape.w - ix0));
       zero_floats(row, kx_lo * cin);
-      if (kx_hi > kx_lo) copy_floats(row + static_cast<std::size_t>(kx_lo) * cin, in.pixel(n, iy, ix0 + kx_lo), (kx_hi - kx_lo) * cin);
+      if (kx_hi > kx_lo)
+        copy_floats(row + static_cast<std::size_t>(kx_lo) * cin, in.pixel(n, iy, ix0 + kx_lo), (kx_hi - kx_lo) * cin);
       zero_floats(row + static_cast<std::size_t>(kx_hi) * cin, (p.kw - kx_hi) * cin);
     }
   }

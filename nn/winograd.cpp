@@ -68,8 +68,8 @@ OutputFn output_fn(Isa isa) {
 
 }  // namespace
 
-void winograd_input_tile_scalar(const WinogradInputTile& t) { winograd_input_tile_with<float>(t); }
-void winograd_output_tile_scalar(const WinogradOutputTile& t) { winograd_output_tile_with<float>(t); }
+void winograd_input_tile_scalar(const WinogradInputTile& t) { winograd_tile_with<float>(t); }
+void winograd_output_tile_scalar(const WinogradOutputTile& t) { winograd_tile_with<float>(t); }
 
 bool winograd_enabled() {
   int v = g_enabled.load();

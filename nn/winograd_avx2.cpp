@@ -6,7 +6,7 @@ namespace {
 typedef float Vec __attribute__((vector_size(32)));
 }  // namespace
 
-void winograd_input_tile_avx2(const WinogradInputTile& t) { winograd_input_tile_with<Vec>(t); }
-void winograd_output_tile_avx2(const WinogradOutputTile& t) { winograd_output_tile_with<Vec>(t); }
+void winograd_input_tile_avx2(const WinogradInputTile& t) { winograd_tile_with<Vec>(t); }
+void winograd_output_tile_avx2(const WinogradOutputTile& t) { winograd_tile_with<Vec>(t); }
 
 }  // namespace nn

@@ -6,7 +6,7 @@ namespace {
 typedef float Vec __attribute__((vector_size(64)));
 }  // namespace
 
-void winograd_input_tile_avx512(const WinogradInputTile& t) { winograd_input_tile_with<Vec>(t); }
-void winograd_output_tile_avx512(const WinogradOutputTile& t) { winograd_output_tile_with<Vec>(t); }
+void winograd_input_tile_avx512(const WinogradInputTile& t) { winograd_tile_with<Vec>(t); }
+void winograd_output_tile_avx512(const WinogradOutputTile& t) { winograd_tile_with<Vec>(t); }
 
 }  // namespace nn

@@ -62,7 +62,7 @@ struct WinogradIo {
 
 // Channels [c0, c1) of one tile's input transform, L = lanes of V at a time.
 template <class V>
-void winograd_input_channels(const WinogradInputTile& t, int c0, int c1) {
+void winograd_channels(const WinogradInputTile& t, int c0, int c1) {
   using Io = WinogradIo<V>;
   for (int ch = c0; ch + Io::lanes <= c1; ch += Io::lanes) {
     V d[36], u[36];
@@ -75,7 +75,7 @@ void winograd_input_channels(const WinogradInputTile& t, int c0, int c1) {
 
 // Channels [c0, c1) of one tile's output transform and epilogue.
 template <class V>
-void winograd_output_channels(const WinogradOutputTile& t, int c0, int c1) {
+void winograd_channels(const WinogradOutputTile& t, int c0, int c1) {
   using Io = WinogradIo<V>;
   for (int ch = c0; ch + Io::lanes <= c1; ch += Io::lanes) {
     V m[36], s[24], y[16];
@@ -95,21 +95,14 @@ void winograd_output_channels(const WinogradOutputTile& t, int c0, int c1) {
   }
 }
 
-// A whole tile: full vectors of V, then the channel tail one float at a time.
-template <class V>
-void winograd_input_tile_with(const WinogradInputTile& t) {
+// A whole tile (input or output): full vectors of V, then the channel tail one float
+// at a time.
+template <class V, class Tile>
+void winograd_tile_with(const Tile& t) {
   constexpr int L = WinogradIo<V>::lanes;
   const int full = t.c / L * L;
-  winograd_input_channels<V>(t, 0, full);
-  if (full < t.c) winograd_input_channels<float>(t, full, t.c);
-}
-
-template <class V>
-void winograd_output_tile_with(const WinogradOutputTile& t) {
-  constexpr int L = WinogradIo<V>::lanes;
-  const int full = t.c / L * L;
-  winograd_output_channels<V>(t, 0, full);
-  if (full < t.c) winograd_output_channels<float>(t, full, t.c);
+  winograd_channels<V>(t, 0, full);
+  if (full < t.c) winograd_channels<float>(t, full, t.c);
 }
 
 }  // namespace

@@ -68,6 +68,12 @@ int add_conv_row(Profiler* prof, const std::string& layer, const Conv2dWeights& 
   return prof->add(layer, op, nchw_str(out), 2.0 * out.count() * p.cin * p.kh * p.kw);
 }
 
+void conv2d_timed(Profiler* prof, int row, const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out,
+                  float* scratch, Act act, const float* residual, bool act_after_residual) {
+  Profiler::Scope t(prof, row);
+  conv2d(in, w, out, scratch, act, residual, act_after_residual);
+}
+
 void ConvScratch::require(const Conv2dWeights& w, int out_w) {
   per_thread_ = std::max(per_thread_, conv2d_scratch_floats(w, out_w));
 }

@@ -47,6 +47,11 @@ Conv2dWeights load_conv(const weights::SafeTensors& st, const std::string& prefi
 // counting the direct form's multiply-adds; -1 when prof is null.
 int add_conv_row(Profiler* prof, const std::string& layer, const Conv2dWeights& w, const Shape& out);
 
+// conv2d() timed into profiler row `row` (prof may be null, row then -1).
+void conv2d_timed(Profiler* prof, int row, const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out,
+                  float* scratch, Act act = Act::None, const float* residual = nullptr,
+                  bool act_after_residual = false);
+
 // Thread-shared im2col scratch for every conv2d of a model, sized by the largest need.
 class ConvScratch {
  public:

@@ -169,9 +169,8 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
 void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const TensorView& out) {
   ConstTensorView x = in;
   if (b.has_expand) {
-    Profiler::Scope t(prof_, b.row_expand);
     const TensorView a{tmp_a_.data(), b.a};
-    conv2d(x, b.expand, a, scratch_.get(), b.act);
+    conv2d_timed(prof_, b.row_expand, x, b.expand, a, scratch_.get(), b.act);
     x = a;
   }
   const TensorView mid{tmp_b_.data(), b.b};
@@ -191,16 +190,12 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const T
     gemm(1, b.squeezed.data.data(), b.se, b.fc2, b.excited.data.data(), b.exp, e2);
     scale_channels(mid, b.excited.data.data());
   }
-  Profiler::Scope t(prof_, b.row_project);
-  conv2d(mid, b.project, out, scratch_.get(), Act::None, b.residual ? in.data : nullptr);
+  conv2d_timed(prof_, b.row_project, mid, b.project, out, scratch_.get(), Act::None, b.residual ? in.data : nullptr);
 }
 
 const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTensorView& in) {
   const TensorView stem_out{pingpong_[0].data(), stem_shape_};
-  {
-    Profiler::Scope t(prof_, row_stem_);
-    conv2d(in, stem_, stem_out, scratch_.get(), Act::HardSwish);
-  }
+  conv2d_timed(prof_, row_stem_, in, stem_, stem_out, scratch_.get(), Act::HardSwish);
   ConstTensorView x = stem_out;
   int next = 1;  // the ping-pong buffer the next block writes (never x's)
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
@@ -209,10 +204,7 @@ const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTens
     x = out;
     if (i != kC13Block) next ^= 1;
   }
-  {
-    Profiler::Scope t(prof_, row_last_);
-    conv2d(x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
-  }
+  conv2d_timed(prof_, row_last_, x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
   outs_.assign({c13_out_.cview(), last_out_.cview()});
   return outs_;
 }

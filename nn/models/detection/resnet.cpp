@@ -108,10 +108,7 @@ void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
 
 const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorView& in) {
   const TensorView stem_out{pingpong_[0].data(), stem_shape_};
-  {
-    Profiler::Scope t(prof_, row_stem_);
-    conv2d(in, stem_, stem_out, scratch_.get(), Act::Relu);
-  }
+  conv2d_timed(prof_, row_stem_, in, stem_, stem_out, scratch_.get(), Act::Relu);
   {
     Profiler::Scope t(prof_, row_pool_);
     max_pool2d(ConstTensorView(stem_out.data, stem_out.shape), MaxPoolParams{}, pooled_.view());
@@ -123,27 +120,17 @@ const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorV
     for (std::size_t i = 0; i < layers_[l].size(); ++i) {
       Bottleneck& b = layers_[l][i];
       const TensorView a{tmp_a_.data(), b.a}, mid{tmp_b_.data(), b.b};
-      {
-        Profiler::Scope t(prof_, b.row1);
-        conv2d(x, b.conv1, a, scratch_.get(), Act::Relu);
-      }
-      {
-        Profiler::Scope t(prof_, b.row2);
-        conv2d(ConstTensorView(a.data, a.shape), b.conv2, mid, scratch_.get(), Act::Relu);
-      }
+      conv2d_timed(prof_, b.row1, x, b.conv1, a, scratch_.get(), Act::Relu);
+      conv2d_timed(prof_, b.row2, a, b.conv2, mid, scratch_.get(), Act::Relu);
       const float* identity = x.data;
       if (b.has_downsample) {
-        Profiler::Scope t(prof_, b.row_down);
-        conv2d(x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
+        conv2d_timed(prof_, b.row_down, x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
         identity = tmp_identity_.data();
       }
       const bool last = i + 1 == layers_[l].size();
       const TensorView out = last ? layer_out_[l].view() : TensorView{pingpong_[next].data(), b.out};
-      {
-        // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
-        Profiler::Scope t(prof_, b.row3);
-        conv2d(ConstTensorView(mid.data, mid.shape), b.conv3, out, scratch_.get(), Act::Relu, identity, true);
-      }
+      // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
+      conv2d_timed(prof_, b.row3, mid, b.conv3, out, scratch_.get(), Act::Relu, identity, true);
       x = ConstTensorView(out.data, out.shape);
       if (!last) next ^= 1;
     }

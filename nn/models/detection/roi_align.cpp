@@ -12,15 +12,8 @@ namespace nn::detection {
 
 namespace {
 
-// One bilinear sample: four source pixels and their weights; all-zero weights for
-// samples outside the map (roi_align_common.h's bilinear_interpolate rules).
-struct Sample {
-  int p1 = 0, p2 = 0, p3 = 0, p4 = 0;
-  float w1 = 0, w2 = 0, w3 = 0, w4 = 0;
-};
-
-Sample sample_at(float y, float x, int height, int width) {
-  Sample s;
+RoiSample sample_at(float y, float x, int height, int width) {
+  RoiSample s{};
   if (y < -1.0f || y > height || x < -1.0f || x > width) return s;
   if (y <= 0) y = 0;
   if (x <= 0) x = 0;
@@ -38,9 +31,9 @@ Sample sample_at(float y, float x, int height, int width) {
     x_high = x_low + 1;
   }
   const float ly = y - y_low, lx = x - x_low, hy = 1.0f - ly, hx = 1.0f - lx;
-  s.w1 = hy * hx, s.w2 = hy * lx, s.w3 = ly * hx, s.w4 = ly * lx;
-  s.p1 = y_low * width + x_low, s.p2 = y_low * width + x_high;
-  s.p3 = y_high * width + x_low, s.p4 = y_high * width + x_high;
+  s.w[0] = hy * hx, s.w[1] = hy * lx, s.w[2] = ly * hx, s.w[3] = ly * lx;
+  s.p[0] = y_low * width + x_low, s.p[1] = y_low * width + x_high;
+  s.p[2] = y_high * width + x_low, s.p[3] = y_high * width + x_high;
   return s;
 }
 
@@ -66,17 +59,19 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   const int grid_w = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_w / p.out_w));
   const float count = static_cast<float>(std::max(grid_h * grid_w, 1));
   const std::size_t sample_count = static_cast<std::size_t>(grid_h) * grid_w;
-  // Grids of up to kRoiBinMaxSamples samples (the models' fixed 2 x 2) go through the
-  // ISA's bin kernel; only adaptive sampling of large RoIs needs the heap and the
-  // scalar kernel, bin by bin on the same arithmetic.
+  // The models' fixed 2 x 2 grid fits on the stack; only adaptive sampling of large
+  // RoIs needs the heap.
   void (*bin_kernel)(const RoiBin&) = roi_bin_scalar;
   if (active_isa() == Isa::Avx512) bin_kernel = roi_bin_avx512;
   else if (active_isa() == Isa::Avx2) bin_kernel = roi_bin_avx2;
-  Sample on_stack[kRoiBinMaxSamples];
-  std::vector<Sample> on_heap;
-  Sample* samples = on_stack;
-  if (sample_count > kRoiBinMaxSamples) on_heap.resize(sample_count), samples = on_heap.data();
+  RoiSample on_stack[16];
+  std::vector<RoiSample> on_heap;
+  RoiSample* samples = on_stack;
+  if (sample_count > 16) on_heap.resize(sample_count), samples = on_heap.data();
   RoiBin bin;
+  bin.samples = samples;
+  bin.count_samples = static_cast<int>(sample_count);
+  bin.base = base;
   bin.channels = channels;
   bin.count = count;
   for (int ph = 0; ph < p.out_h; ++ph)
@@ -90,32 +85,8 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
         }
       }
       // Channels innermost (NHWC): per channel the samples still add in torchvision's order.
-      float* o = out + (static_cast<std::size_t>(ph) * p.out_w + pw) * channels;
-      bin.out = o;
-      if (sample_count <= kRoiBinMaxSamples) {
-        for (std::size_t s = 0; s < sample_count; ++s) {
-          const Sample& sm = samples[s];
-          const int px[4] = {sm.p1, sm.p2, sm.p3, sm.p4};
-          const float w[4] = {sm.w1, sm.w2, sm.w3, sm.w4};
-          for (int j = 0; j < 4; ++j) {
-            bin.v[4 * s + j] = base + static_cast<std::size_t>(px[j]) * channels;
-            bin.w[4 * s + j] = w[j];
-          }
-        }
-        bin.samples = static_cast<int>(sample_count);
-        bin_kernel(bin);
-        continue;
-      }
-      std::fill(o, o + channels, 0.0f);
-      for (std::size_t k2 = 0; k2 < sample_count; ++k2) {
-        const Sample& s = samples[k2];
-        const float* v1 = base + static_cast<std::size_t>(s.p1) * channels;
-        const float* v2 = base + static_cast<std::size_t>(s.p2) * channels;
-        const float* v3 = base + static_cast<std::size_t>(s.p3) * channels;
-        const float* v4 = base + static_cast<std::size_t>(s.p4) * channels;
-        for (int c = 0; c < channels; ++c) o[c] += s.w1 * v1[c] + s.w2 * v2[c] + s.w3 * v3[c] + s.w4 * v4[c];
-      }
-      for (int c = 0; c < channels; ++c) o[c] /= count;
+      bin.out = out + (static_cast<std::size_t>(ph) * p.out_w + pw) * channels;
+      bin_kernel(bin);
     }
 }
 

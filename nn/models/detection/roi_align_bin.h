@@ -4,6 +4,8 @@
 // performs the same float operations in the same order, so all ISAs give the same bits.
 #pragma once
 
+#include <cstddef>
+
 #include "nn/models/detection/roi_align_kernel.h"
 
 namespace nn::detection {
@@ -19,13 +21,15 @@ V roi_load(const float* p) {
 template <class V>
 void roi_bin_channels(const RoiBin& b, int c0, int c1) {
   constexpr int L = sizeof(V) / sizeof(float);
+  const std::ptrdiff_t ld = b.channels;
   for (int c = c0; c + L <= c1; c += L) {
     V acc = V{};
-    for (int s = 0; s < b.samples; ++s) {
-      const float* const* v = b.v + 4 * s;
-      const float* w = b.w + 4 * s;
-      const V val = ((roi_load<V>(v[0] + c) * w[0] + roi_load<V>(v[1] + c) * w[1]) + roi_load<V>(v[2] + c) * w[2]) +
-                    roi_load<V>(v[3] + c) * w[3];
+    for (int s = 0; s < b.count_samples; ++s) {
+      const RoiSample& sm = b.samples[s];
+      const float* x = b.base + c;
+      const V val = ((roi_load<V>(x + sm.p[0] * ld) * sm.w[0] + roi_load<V>(x + sm.p[1] * ld) * sm.w[1]) +
+                     roi_load<V>(x + sm.p[2] * ld) * sm.w[2]) +
+                    roi_load<V>(x + sm.p[3] * ld) * sm.w[3];
       acc = acc + val;
     }
     acc = acc / b.count;

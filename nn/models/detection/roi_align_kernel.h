@@ -4,16 +4,20 @@
 
 namespace nn::detection {
 
-// Fixed sampling grids up to 4 x 4 per bin go through the kernels.
-constexpr int kRoiBinMaxSamples = 16;
+// One bilinear sample: four source pixels (indexes into the map, y * width + x) and
+// their weights; all-zero weights for samples outside the map.
+struct RoiSample {
+  int p[4];
+  float w[4];
+};
 
-// One output bin over all channels: out[c] = (sum over samples s of
-// w[4s]*v[4s][c] + w[4s+1]*v[4s+1][c] + w[4s+2]*v[4s+2][c] + w[4s+3]*v[4s+3][c]) / count,
-// summed in that order, as torchvision's CPU kernel does per channel.
+// One output bin over all channels: out[c] = (sum over samples s of w[0]*x[p[0]][c] +
+// w[1]*x[p[1]][c] + w[2]*x[p[2]][c] + w[3]*x[p[3]][c]) / count, with x[p] = base +
+// p * channels, summed in that order, as torchvision's CPU kernel does per channel.
 struct RoiBin {
-  const float* v[4 * kRoiBinMaxSamples];
-  float w[4 * kRoiBinMaxSamples];
-  int samples;
+  const RoiSample* samples;
+  int count_samples;
+  const float* base;
   int channels;
   float count;
   float* out;

@@ -75,8 +75,9 @@ void RoiHeads::plan(const std::vector<Shape>& pooled, const ImageSizes& sizes, i
   prof_ = prof;
   if (prof) {
     // Work at max_rois RoIs (what the RPN returns at most).
-    const double r = std::max(1, max_rois), in = kChannels * kPool * kPool;
-    const std::string shape = "[" + std::to_string(std::max(1, max_rois)) + ", " + std::to_string(hidden_) + "]";
+    const int rois = std::max(1, max_rois);
+    const double r = rois, in = kChannels * kPool * kPool;
+    const std::string shape = "[" + std::to_string(rois) + ", " + std::to_string(hidden_) + "]";
     row_pool_ = prof->add("roi_heads.box_roi_pool", "RoIAlign 7x7, 2x2 samples", "", 0);
     row_fc6_ = prof->add("roi_heads.box_head.fc6", "linear + relu", shape, 2.0 * r * in * hidden_);
     row_fc7_ = prof->add("roi_heads.box_head.fc7", "linear + relu", shape, 2.0 * r * hidden_ * hidden_);
@@ -133,25 +134,17 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
     roi_align_one(pooled[level], 0, b, p, features_.data() + i * per_roi);
   }
   t_pool.stop();
-  {
-    Profiler::Scope t(prof_, row_fc6_);
-    GemmEpilogue e6;
-    e6.bias = fc6_bias_.data(), e6.act = Act::Relu;
-    gemm_parallel(r, features_.data(), static_cast<std::ptrdiff_t>(per_roi), fc6_, h6_.data(), hidden_, e6);
-  }
-  {
-    Profiler::Scope t(prof_, row_fc7_);
-    GemmEpilogue e7;
-    e7.bias = fc7_bias_.data(), e7.act = Act::Relu;
-    gemm_parallel(r, h6_.data(), hidden_, fc7_, h7_.data(), hidden_, e7);
-  }
-  const int c = classes_;
-  {
-    Profiler::Scope t(prof_, row_predictor_);
+  // y = act(x W^T + b) over the r RoIs, timed into profiler row `row`.
+  auto linear = [&](int row, const float* x, int lda, const GemmWeights& w, const AlignedBuffer& b, Act act, float* y) {
+    Profiler::Scope t(prof_, row);
     GemmEpilogue ep;
-    ep.bias = predictor_bias_.data();
-    gemm_parallel(r, h7_.data(), hidden_, predictor_, logits_.data(), 5 * c, ep);
-  }
+    ep.bias = b.data(), ep.act = act;
+    gemm_parallel(r, x, lda, w, y, w.n(), ep);
+  };
+  const int c = classes_;
+  linear(row_fc6_, features_.data(), static_cast<int>(per_roi), fc6_, fc6_bias_, Act::Relu, h6_.data());
+  linear(row_fc7_, h6_.data(), hidden_, fc7_, fc7_bias_, Act::Relu, h7_.data());
+  linear(row_predictor_, h7_.data(), hidden_, predictor_, predictor_bias_, Act::None, logits_.data());
   Profiler::Scope t_post(prof_, row_post_);
 
   boxes_.clear(), scores_.clear(), labels_.clear();
