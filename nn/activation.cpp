@@ -44,9 +44,11 @@ void apply_act_ref(Act act, float* x, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) x[i] = act_ref(act, x[i]);
 }
 
-void apply_act(Act act, float* x, std::size_t count) {
+void apply_act(Act act, float* x, std::size_t count) { apply_act(act, x, count, active_isa()); }
+
+void apply_act(Act act, float* x, std::size_t count, Isa isa) {
   if (act == Act::None || count == 0) return;
-  switch (active_isa()) {
+  switch (isa) {
     case Isa::Avx512:
       apply_act_avx512(static_cast<int>(act), x, count);
       return;

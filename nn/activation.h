@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "nn/act.h"
+#include "nn/isa.h"
 
 namespace nn {
 
@@ -12,7 +13,9 @@ namespace nn {
 float act_ref(Act act, float x);
 
 // x[i] = act(x[i]) for i in [0, count), using the active ISA.
+// The first form uses active_isa() (outside parallel regions); inside one, pass the ISA.
 void apply_act(Act act, float* x, std::size_t count);
+void apply_act(Act act, float* x, std::size_t count, Isa isa);
 void apply_act_ref(Act act, float* x, std::size_t count);
 
 }  // namespace nn

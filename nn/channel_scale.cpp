@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/channel_scale.h"
 
 #include <cstddef>
@@ -19,7 +20,7 @@ void scale_channels(const TensorView& x, const float* scale) {
   const long long chunk = c >= 4096 ? 1 : 4096 / c;
   const long long chunks = (pixels + chunk - 1) / chunk;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) if (!omp_in_parallel() && x.count() > 65536)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads()) if (!omp_in_parallel() && x.count() > 65536)
 #endif
   for (long long i = 0; i < chunks; ++i) {
     const long long p1 = pixels < (i + 1) * chunk ? pixels : (i + 1) * chunk;

@@ -185,7 +185,7 @@ void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView&
   const int blocks_per_image = (h + block - 1) / block;
   const int blocks = out.shape.n * blocks_per_image;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (int b = 0; b < blocks; ++b) {
     float* mine = scratch ? scratch + per_thread * thread_index() : nullptr;

@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/dwconv.h"
 
 #include <algorithm>
@@ -115,13 +116,6 @@ void dwconv_rows_scalar(const ConstTensorView& in, const DwConvWeights& w, const
   }
 }
 
-int team_size() {
-#ifdef ROADNN_OPENMP
-  return omp_in_parallel() ? 1 : omp_get_max_threads();
-#else
-  return 1;
-#endif
-}
 
 }  // namespace
 

@@ -12,6 +12,7 @@
 // reach next (W of the large layers streams from L3 once per row block). Intermediate K
 // blocks go to the scratch tile (on the stack), never to C, so a residual that aliases C
 // is intact when the last block's epilogue reads it.
+#include "nn/threads.h"
 #include "nn/gemm.h"
 
 #include <algorithm>
@@ -286,7 +287,7 @@ void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, 
                 std::ptrdiff_t ldc, const GemmEpilogue& ep) {
   const int panels = (w.n + w.nr - 1) / w.nr;
 #ifdef ROADNN_OPENMP
-  const int threads = omp_in_parallel() ? 1 : omp_get_max_threads();
+  const int threads = team_size();
   if (threads > 1) {
     const int mr = w.mr;
     const int row_tiles = (m + mr - 1) / mr;

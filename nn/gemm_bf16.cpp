@@ -14,13 +14,7 @@
 
 namespace nn {
 
-bool bf16_gemm_available() {
-  static const bool hardware = [] {
-    __builtin_cpu_init();
-    return detect_isa() == Isa::Avx512 && __builtin_cpu_supports("avx512bf16");
-  }();
-  return hardware && active_isa() == Isa::Avx512;
-}
+bool bf16_gemm_available() { return detect_avx512_bf16() && active_isa() == Isa::Avx512; }
 
 bf16 f32_to_bf16(float x) {
   std::uint32_t u;
@@ -42,7 +36,8 @@ float bf16_to_f32(bf16 x) {
 void convert_to_bf16(int rows, int cols, const float* src, std::ptrdiff_t lds, bf16* dst,
                      std::ptrdiff_t ldd) {
   if (rows <= 0 || cols <= 0) return;
-  if (bf16_gemm_available()) return convert_to_bf16_avx512bf16(rows, cols, src, lds, dst, ldd);
+  // The hardware alone decides (this may run on a worker thread): both forms give the same bits.
+  if (detect_avx512_bf16()) return convert_to_bf16_avx512bf16(rows, cols, src, lds, dst, ldd);
   for (int r = 0; r < rows; ++r) {
     for (int j = 0; j < cols; ++j) dst[r * ldd + j] = f32_to_bf16(src[r * lds + j]);
     if (cols & 1) dst[r * ldd + cols] = 0;
@@ -51,7 +46,7 @@ void convert_to_bf16(int rows, int cols, const float* src, std::ptrdiff_t lds, b
 
 GemmWeightsBf16 GemmWeightsBf16::pack(const float* w, int n, int k) {
   if (!bf16_gemm_available())
-    throw Error("gemm_bf16: this CPU has no AVX512_BF16 (or NN_ISA is below avx512)");
+    throw Error("gemm_bf16: this CPU has no AVX512_BF16 (or the kernels are capped below avx512)");
   if (n <= 0 || k <= 0)
     throw Error("gemm_bf16: cannot pack a weight matrix of shape [" + std::to_string(n) + " x " +
                 std::to_string(k) + "]");
@@ -84,7 +79,7 @@ GemmPacked pair_view(int m, const bf16* a, std::ptrdiff_t lda, const GemmWeights
                      const float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep) {
   if (w.empty()) throw Error("gemm_bf16: weights were not packed");
   if (!bf16_gemm_available())
-    throw Error("gemm_bf16: this CPU has no AVX512_BF16 (or NN_ISA is below avx512)");
+    throw Error("gemm_bf16: this CPU has no AVX512_BF16 (or the kernels are capped below avx512)");
   if (m < 0) throw Error("gemm_bf16: negative row count " + std::to_string(m));
   if (m > 0 && (!a || !c)) throw Error("gemm_bf16: null A or C");
   const int kp = (w.k() + 1) / 2;

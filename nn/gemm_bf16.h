@@ -26,7 +26,7 @@ namespace nn {
 using bf16 = std::uint16_t;
 
 // True when the CPU has AVX512_BF16 on top of nn/isa.h's AVX-512 set and the active ISA
-// (NN_ISA, set_isa) is AVX-512; callers fail with a clear error otherwise.
+// (the ExecOptions cap, nn/exec.h) is AVX-512; callers fail with a clear error otherwise.
 bool bf16_gemm_available();
 
 // Round to nearest even; NaN stays NaN (quiet), infinities stay infinite. The reference

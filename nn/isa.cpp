@@ -1,31 +1,12 @@
 #include "nn/isa.h"
 
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 
+#include "nn/exec.h"
+
 namespace nn {
-namespace {
 
-Isa g_override = Isa::Avx512;
-bool g_has_override = false;
-
-Isa env_isa() {
-  static const Isa cached = [] {
-    const char* text = std::getenv("NN_ISA");
-    Isa isa = Isa::Avx512;
-    if (text && *text && !parse_isa(text, &isa)) {
-      std::fprintf(stderr, "warning: NN_ISA=%s is not one of scalar, avx2, avx512; ignored\n", text);
-      isa = Isa::Avx512;
-    }
-    return isa;
-  }();
-  return cached;
-}
-
-Isa min_isa(Isa a, Isa b) { return static_cast<int>(a) < static_cast<int>(b) ? a : b; }
-
-}  // namespace
+ExecOptions& mutable_exec();  // nn/exec.cpp
 
 const char* isa_name(Isa isa) {
   switch (isa) {
@@ -37,6 +18,7 @@ const char* isa_name(Isa isa) {
 }
 
 bool parse_isa(const char* text, Isa* out) {
+  if (!text) return false;
   if (std::strcmp(text, "scalar") == 0) { *out = Isa::Scalar; return true; }
   if (std::strcmp(text, "avx2") == 0) { *out = Isa::Avx2; return true; }
   if (std::strcmp(text, "avx512") == 0) { *out = Isa::Avx512; return true; }
@@ -59,15 +41,16 @@ Isa detect_isa() {
   return cached;
 }
 
-Isa active_isa() {
-  Isa isa = min_isa(detect_isa(), env_isa());
-  if (g_has_override) isa = min_isa(isa, g_override);
-  return isa;
+bool detect_avx512_bf16() {
+  static const bool cached = [] {
+    __builtin_cpu_init();
+    return detect_isa() == Isa::Avx512 && __builtin_cpu_supports("avx512bf16");
+  }();
+  return cached;
 }
 
-void set_isa(Isa isa) {
-  g_override = min_isa(isa, detect_isa());
-  g_has_override = true;
-}
+Isa active_isa() { return min_isa(detect_isa(), current_exec().max_isa); }
+
+void set_isa(Isa isa) { mutable_exec().max_isa = min_isa(isa, detect_isa()); }
 
 }  // namespace nn

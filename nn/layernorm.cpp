@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/layernorm.h"
 
 #include <cmath>
@@ -59,8 +60,13 @@ void layernorm_row_scalar(int c, const float* x, float* y, const float* gamma, c
 
 void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
                std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps) {
+  layernorm(rows, c, x, ldx, y, ldy, gamma, beta, eps, active_isa());
+}
+
+void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
+               std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps, Isa isa) {
   check_args("layernorm", rows, c, x, ldx, y, ldy);
-  switch (active_isa()) {
+  switch (isa) {
     case Isa::Avx512:
       layernorm_rows_avx512(rows, c, x, ldx, y, ldy, gamma, beta, eps);
       return;
@@ -78,8 +84,9 @@ void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, floa
 void layernorm_parallel(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
                         std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps) {
   check_args("layernorm", rows, c, x, ldx, y, ldy);
+  const Isa isa = active_isa();
 #ifdef ROADNN_OPENMP
-  const int threads = omp_in_parallel() ? 1 : omp_get_max_threads();
+  const int threads = team_size();
   // Rows in multiples of 4 per chunk keep the kernels' groups full; a row's result
   // does not depend on its group anyway.
   const std::size_t min_rows = 256;
@@ -93,12 +100,12 @@ void layernorm_parallel(std::size_t rows, int c, const float* x, std::ptrdiff_t 
       const std::size_t r0 = static_cast<std::size_t>(i) * chunk;
       const std::size_t r1 = r0 + chunk < rows ? r0 + chunk : rows;
       layernorm(r1 - r0, c, x + static_cast<std::ptrdiff_t>(r0) * ldx, ldx,
-                y + static_cast<std::ptrdiff_t>(r0) * ldy, ldy, gamma, beta, eps);
+                y + static_cast<std::ptrdiff_t>(r0) * ldy, ldy, gamma, beta, eps, isa);
     }
     return;
   }
 #endif
-  layernorm(rows, c, x, ldx, y, ldy, gamma, beta, eps);
+  layernorm(rows, c, x, ldx, y, ldy, gamma, beta, eps, isa);
 }
 
 void layernorm_ref(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,

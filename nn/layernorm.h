@@ -11,12 +11,18 @@
 
 #include <cstddef>
 
+#include "nn/isa.h"
+
 namespace nn {
 
 // x and y are [rows x c] with row strides ldx, ldy (in floats); y may alias x.
 // gamma/beta may be null (then 1 and 0). Single-threaded; callers split rows.
+// The first form uses active_isa() and is for code outside parallel regions; inside
+// one, pass the model's ISA (worker threads do not see the caller's ExecScope).
 void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
                std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps);
+void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
+               std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps, Isa isa);
 void layernorm_ref(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
                    std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps);
 

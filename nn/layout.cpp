@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/layout.h"
 
 #include <cstddef>
@@ -34,7 +35,6 @@ std::size_t check(const char* who, const float* src, int n, int c, int h, int w,
 
 #ifdef ROADNN_OPENMP
 // Threads for a parallel loop: the whole team, or 1 when already inside a region.
-int team_size() { return omp_in_parallel() ? 1 : omp_get_max_threads(); }
 #endif
 
 // [planes][rows][cols] -> [planes][cols][rows] where rows is the large stride of the

@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/pool.h"
 
 #include <cstddef>
@@ -29,7 +30,6 @@ void check_input(const char* who, const Shape& in) {
 
 #ifdef ROADNN_OPENMP
 // Threads for a parallel loop: the whole team, or 1 when already inside a region.
-int team_size() { return omp_in_parallel() ? 1 : omp_get_max_threads(); }
 #endif
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/resize.h"
 
 #include <cmath>
@@ -73,7 +74,6 @@ void bilinear_row_scalar(const float* row0, const float* row1, float h0, float h
 
 #ifdef ROADNN_OPENMP
 // Threads for a parallel loop: the whole team, or 1 when already inside a region.
-int team_size() { return omp_in_parallel() ? 1 : omp_get_max_threads(); }
 #endif
 
 }  // namespace

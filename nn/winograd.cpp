@@ -10,22 +10,22 @@
 #include "nn/winograd.h"
 
 #include <algorithm>
-#include <atomic>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 
 #include "nn/activation.h"
 #include "nn/error.h"
+#include "nn/exec.h"
 #include "nn/threads.h"
 #include "nn/winograd_kernel.h"
 #include "nn/winograd_transform.h"
 
 namespace nn {
 
+ExecOptions& mutable_exec();  // nn/exec.cpp
+
 namespace {
 
-std::atomic<int> g_enabled{-1};  // -1: not read from the environment yet
 
 // G of F(4x4, 3x3) (the filter transform), points 0, +-1, +-2, infinity.
 constexpr double kG[6][3] = {{1.0 / 4, 0, 0},
@@ -71,17 +71,9 @@ OutputFn output_fn(Isa isa) {
 void winograd_input_tile_scalar(const WinogradInputTile& t) { winograd_tile_with<float>(t); }
 void winograd_output_tile_scalar(const WinogradOutputTile& t) { winograd_tile_with<float>(t); }
 
-bool winograd_enabled() {
-  int v = g_enabled.load();
-  if (v < 0) {
-    const char* env = std::getenv("NN_WINOGRAD");
-    v = env && std::strcmp(env, "0") == 0 ? 0 : 1;
-    g_enabled.store(v);
-  }
-  return v == 1;
-}
+bool winograd_enabled() { return current_exec().winograd; }
 
-void set_winograd(bool on) { g_enabled.store(on ? 1 : 0); }
+void set_winograd(bool on) { mutable_exec().winograd = on; }
 
 WinogradWeights WinogradWeights::pack(const float* w, int cin, int cout, Isa isa) {
   if (!w || cin < 1 || cout < 1)
@@ -153,7 +145,7 @@ void winograd_conv2d(const ConstTensorView& in, const WinogradWeights& w, const 
   const bool fused_act = act == Act::None || act == Act::Relu;
   const std::ptrdiff_t vs = static_cast<std::ptrdiff_t>(tmax) * cin, ms = static_cast<std::ptrdiff_t>(tmax) * cout;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (long b = 0; b < blocks; ++b) {
     const long t0 = b * per_block, t1 = std::min(tiles, t0 + per_block);
@@ -211,10 +203,10 @@ void winograd_conv2d(const ConstTensorView& in, const WinogradWeights& w, const 
         float* px = job.dst[p];
         if (!px) continue;
         const float* res = residual ? residual + (px - out.data) : nullptr;
-        if (!act_after_residual) apply_act(act, px, cout);
+        if (!act_after_residual) apply_act(act, px, cout, w.isa());
         if (res)
           for (int c = 0; c < cout; ++c) px[c] = px[c] + res[c];
-        if (act_after_residual) apply_act(act, px, cout);
+        if (act_after_residual) apply_act(act, px, cout, w.isa());
       }
     }
   }

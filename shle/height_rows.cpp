@@ -1,8 +1,7 @@
 #include <cfloat>
-#include <cstdlib>
-#include <cstring>
-
 #include "shle/height_rows.h"
+
+#include "nn/isa.h"
 
 namespace shle {
 
@@ -19,13 +18,7 @@ void level_row_baseline(const float* d, int n, const RowParams& p, double* z, do
 }
 
 LevelRowFn level_row_kernel() {
-  static const LevelRowFn fn = [] {
-    const char* force = std::getenv("NN_ISA");
-    if (force && std::strcmp(force, "scalar") == 0) return &level_row_baseline;
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") ? &level_row_avx2 : &level_row_baseline;
-  }();
-  return fn;
+  return static_cast<int>(nn::active_isa()) >= static_cast<int>(nn::Isa::Avx2) ? &level_row_avx2 : &level_row_baseline;
 }
 
 }  // namespace shle

@@ -16,8 +16,8 @@ struct RowParams {
 void level_row_baseline(const float* d, int n, const RowParams& p, double* z, double* y, std::int64_t* flags);
 void level_row_avx2(const float* d, int n, const RowParams& p, double* z, double* y, std::int64_t* flags);
 
-// level_row_avx2 when the CPU supports AVX2 (and NN_ISA is not "scalar"), else
-// level_row_baseline.
+// level_row_avx2 when nn::active_isa() (the CPU capped by the calling thread's
+// nn::ExecOptions) has AVX2, else level_row_baseline.
 using LevelRowFn = void (*)(const float*, int, const RowParams&, double*, double*, std::int64_t*);
 LevelRowFn level_row_kernel();
 

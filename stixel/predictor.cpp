@@ -75,9 +75,12 @@ std::vector<float> scale_intrinsics(const std::vector<float>& K, int w0, int h0,
 }
 
 Predictor::Predictor(const weights::SafeTensors& st, const ModelSettings& settings)
-    : settings_(settings), model_(st, settings.head, settings.precision) {
+    : Predictor(nn::StixelNExT(st, settings.head, settings.precision), settings) {}
+
+Predictor::Predictor(const nn::StixelNExT& model, const ModelSettings& settings)
+    : settings_(settings), model_(model) {
   if (settings_.anchors.size() != nn::StixelHead::kCandidates)
-    throw Error(st.source() + ": the head predicts 64 candidates but the anchor set has " +
+    throw Error("stixelnext: the head predicts 64 candidates but the anchor set has " +
                 std::to_string(settings_.anchors.size()));
   model_.plan(1, settings_.input_height, settings_.input_width, settings_.effective_columns());
   input_.resize(static_cast<std::size_t>(3) * settings_.input_height * settings_.input_width);

@@ -49,6 +49,10 @@ std::vector<float> scale_intrinsics(const std::vector<float>& K, int w0, int h0,
 class Predictor {
  public:
   Predictor(const weights::SafeTensors& st, const ModelSettings& settings);
+  // On a loaded, never planned model (settings.head and .precision are the model's):
+  // the copy shares its packed weights (nn/buffer.h) and plans its own arena, so any
+  // number of predictors can run one model on as many threads.
+  Predictor(const nn::StixelNExT& model, const ModelSettings& settings);
   const ModelSettings& settings() const { return settings_; }
   nn::StixelNExT& model() { return model_; }
 

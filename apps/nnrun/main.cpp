@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "apps/common/precision_option.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/nnrun/detector_runner.h"
@@ -68,6 +69,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("nnrun");
   std::string model, weights_path, input_path, output_path, isa_name, precision_name, conv3x3;
   int threads = 0, repeat = 0;
   bool profile = false, quiet = false, dump_proposals = false;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "apps/shle/frame_loader.h"
 #include "shle/box_source.h"
 #include "shle/error.h"
@@ -98,6 +99,7 @@ shle::SequenceRun run_detections(const BenchScene& s, const shle::PipelineOption
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("shle_eval");
   std::string root;
   cli::Parser p("shle_eval", "--benchmark DIR",
                 "Runs shle over the synthetic benchmark written by `shle_synth --benchmark DIR` and prints\n"

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "apps/common/image_io.h"
 #include "apps/shle/frame_loader.h"
 #include "apps/shle/height_plot.h"
@@ -51,6 +52,7 @@ std::vector<int> parse_labels(const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("shle");
   std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
   std::string tracker = "ncc", out_dir = "shle_out";
   std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels;

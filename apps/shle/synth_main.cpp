@@ -7,6 +7,7 @@
 #include <string>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "apps/common/image_io.h"
 #include "apps/shle/synth_writer.h"
 #include "shle/error.h"
@@ -23,6 +24,7 @@ std::string scene_folder(int index, const shle::synth::SceneSpec& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("shle_synth");
   std::string out, device = "bar", layout = "released";
   double height = 3.3, start = 70, end = 5, miss = 0.2;
   int seed = 1, frames = 60;

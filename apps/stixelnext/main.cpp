@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "apps/common/precision_option.h"
 #include "apps/common/image_io.h"
 #include "apps/common/unused_tensors.h"
@@ -84,6 +85,7 @@ bool parse_size(const std::string& text, int* h, int* w) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("stixelnext");
   std::string weights_path, calib_path, out_dir = "stixels", format = "stx1", head, anchors, norm, input_size,
                                         cluster_axes = "0,2", precision;
   double threshold = 0.36, train_focal = 0;

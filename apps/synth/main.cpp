@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "apps/common/exec_env.h"
 #include "nn/models/convnext.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
@@ -96,6 +97,7 @@ std::vector<std::int64_t> parse_shape(const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::apply_exec_environment("synth");
   std::string model, shape_text, out, range = "normal", head = "v4", image_size;
   int seed = 1, classes = 2;
   cli::Parser args("synth", "(--model NAME | --shape N,C,H,W) --out FILE.safetensors [--seed S] [--range normal|LO,HI]",

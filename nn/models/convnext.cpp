@@ -154,7 +154,7 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
                    Precision precision)
     : cfg_(convnext_config_from(st, prefix)), precision_(precision) {
   if (precision_ == Precision::Bf16 && !bf16_gemm_available())
-    throw Error("convnext: precision bf16 needs AVX512_BF16, which this CPU (or NN_ISA) does not offer");
+    throw Error("convnext: precision bf16 needs AVX512_BF16, which this CPU (or the kernel cap) does not offer");
   weights::check_tensors(st, convnext_tensor_specs(cfg_, prefix));
   auto count = [this](std::size_t floats) { weight_bytes_ += floats * sizeof(float); };
 
@@ -300,7 +300,7 @@ void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
   GemmEpilogue ep;
   ep.bias = stem_b_.data();
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (int ci = 0; ci < chunks; ++ci) {
     float* col = scratch_.data() + scratch_per_thread_ * thread_index();
@@ -317,7 +317,7 @@ void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
     const int rows = (y1 - y0) * ow;
     float* out = act_a_.data() + ((static_cast<std::size_t>(n) * s.h + y0) * ow) * c0;
     gemm(rows, col, 48, stem_w_, out, c0, ep);
-    layernorm(rows, c0, out, c0, out, c0, stem_gamma_.data(), stem_beta_.data(), cfg_.eps);
+    layernorm(rows, c0, out, c0, out, c0, stem_gamma_.data(), stem_beta_.data(), cfg_.eps, stem_w_.isa());
   }
 }
 
@@ -335,8 +335,8 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
     for (int ky = 0; ky < 2; ++ky) {
       const float* src = x + ((static_cast<std::size_t>(n) * prev.h + 2 * oy + ky) * prev.w) * cin;
       float* d = dst + ky * 2 * cin;
-      layernorm(ow, cin, src, 2 * cin, d, patch, nullptr, nullptr, cfg_.eps);
-      layernorm(ow, cin, src + cin, 2 * cin, d + cin, patch, nullptr, nullptr, cfg_.eps);
+      layernorm(ow, cin, src, 2 * cin, d, patch, nullptr, nullptr, cfg_.eps, stem_w_.isa());
+      layernorm(ow, cin, src + cin, 2 * cin, d + cin, patch, nullptr, nullptr, cfg_.eps, stem_w_.isa());
     }
   };
   GemmEpilogue ep;
@@ -344,7 +344,7 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
   if (st.down_whole) {
     const int rows = s.n * s.h;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
     for (int r = 0; r < rows; ++r)
       im2col(r / s.h, r % s.h, scratch_.data() + static_cast<std::size_t>(r) * ow * patch);
@@ -354,7 +354,7 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
   const int per_image = (s.h + st.down_chunk - 1) / st.down_chunk;
   const int chunks = s.n * per_image;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (int ci = 0; ci < chunks; ++ci) {
     float* col = scratch_.data() + scratch_per_thread_ * thread_index();
@@ -379,7 +379,7 @@ void convert_rows_parallel(std::size_t rows, int cols, const float* src, bf16* d
   const std::size_t chunk = 16;
   const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>((rows + chunk - 1) / chunk);
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (std::ptrdiff_t i = 0; i < chunks; ++i) {
     const std::size_t r0 = static_cast<std::size_t>(i) * chunk, r1 = std::min(rows, r0 + chunk);
@@ -414,7 +414,7 @@ void ConvNeXt::run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m
   float* x = act_a_.data() + m0 * c;
   const float* t = act_b_.data() + m0 * c;
   const int rows = static_cast<int>(m1 - m0);
-  layernorm(rows, c, t, c, sc.ln, c, nullptr, nullptr, cfg_.eps);
+  layernorm(rows, c, t, c, sc.ln, c, nullptr, nullptr, cfg_.eps, stem_w_.isa());
   GemmEpilogue e1;
   e1.bias = b.b1.data();
   e1.act = Act::Gelu;
@@ -447,7 +447,7 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
     // leave one thread a tile more: 7 against 6 at 28x28) and runs it in tiles of
     // `tile` rows. A row's result does not depend on its tile.
 #ifdef ROADNN_OPENMP
-#pragma omp parallel
+#pragma omp parallel num_threads(nn::num_threads())
 #endif
     {
       int id = 0, team = 1;

@@ -50,7 +50,7 @@ class ConvNeXt {
   // Checks every expected tensor (first problem reported by name) and repacks the
   // weights for the active ISA. The SafeTensors object may be freed afterwards.
   // Precision::Bf16 runs the MLP GEMMs (90 % of the work) in bfloat16; it throws
-  // nn::Error when the CPU (or NN_ISA) has no AVX512_BF16.
+  // nn::Error when the CPU (or the kernel cap) has no AVX512_BF16.
   ConvNeXt(const weights::SafeTensors& st, const std::string& prefix = "features.",
            Precision precision = Precision::F32);
 

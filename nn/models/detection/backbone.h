@@ -1,6 +1,7 @@
 // What the detector needs from a backbone body: the feature maps the FPN consumes.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "nn/profiler.h"
@@ -11,12 +12,35 @@ namespace nn::detection {
 class Backbone {
  public:
   virtual ~Backbone() = default;
+  // A copy sharing the packed weights (nn/buffer.h); call it on an unplanned body
+  // only, then plan the copy.
+  virtual std::unique_ptr<Backbone> clone() const = 0;
   virtual std::vector<int> out_channels() const = 0;
   // Plans every buffer for an h x w input; registers one row per layer in `layers`
   // (may be null), which forward() then times when it is enabled.
   virtual void plan(int h, int w, Profiler* layers) = 0;
   // in: {1, h, w, 3}. Views stay valid until the next forward.
   virtual const std::vector<ConstTensorView>& forward(const ConstTensorView& in) = 0;
+};
+
+// A Backbone owner that copies by clone(), so that the detector stays copyable.
+class BackboneHolder {
+ public:
+  BackboneHolder() = default;
+  explicit BackboneHolder(std::unique_ptr<Backbone> b) : p_(std::move(b)) {}
+  BackboneHolder(const BackboneHolder& o) : p_(o.p_ ? o.p_->clone() : nullptr) {}
+  BackboneHolder& operator=(const BackboneHolder& o) {
+    if (this != &o) p_ = o.p_ ? o.p_->clone() : nullptr;
+    return *this;
+  }
+  BackboneHolder(BackboneHolder&&) noexcept = default;
+  BackboneHolder& operator=(BackboneHolder&&) noexcept = default;
+  Backbone* operator->() const { return p_.get(); }
+  Backbone& operator*() const { return *p_; }
+  explicit operator bool() const { return p_ != nullptr; }
+
+ private:
+  std::unique_ptr<Backbone> p_;
 };
 
 }  // namespace nn::detection

@@ -65,7 +65,7 @@ class FasterRcnn {
  private:
   FasterRcnnConfig cfg_;
   std::vector<weights::TensorSpec> specs_;
-  std::unique_ptr<Backbone> backbone_;
+  BackboneHolder backbone_;
   Fpn fpn_;
   Rpn rpn_;
   RoiHeads roi_heads_;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <memory>
 #include <vector>
 
 #include "nn/models/detection/backbone.h"
@@ -19,6 +20,7 @@ class MobileNetV3Backbone : public Backbone {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix);
   std::vector<int> out_channels() const override { return {160, 960}; }
 
+  std::unique_ptr<Backbone> clone() const override { return std::make_unique<MobileNetV3Backbone>(*this); }
   void plan(int h, int w, Profiler* layers) override;
   // in: {1, h, w, 3}. Returns views of the two outputs (valid until the next call).
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <memory>
 #include <vector>
 
 #include "nn/models/detection/backbone.h"
@@ -18,6 +19,7 @@ class ResNet50Backbone : public Backbone {
   static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix);
 
   std::vector<int> out_channels() const override { return {256, 512, 1024, 2048}; }
+  std::unique_ptr<Backbone> clone() const override { return std::make_unique<ResNet50Backbone>(*this); }
   void plan(int h, int w, Profiler* layers) override;
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 

@@ -62,8 +62,8 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   // The models' fixed 2 x 2 grid fits on the stack; only adaptive sampling of large
   // RoIs needs the heap.
   void (*bin_kernel)(const RoiBin&) = roi_bin_scalar;
-  if (active_isa() == Isa::Avx512) bin_kernel = roi_bin_avx512;
-  else if (active_isa() == Isa::Avx2) bin_kernel = roi_bin_avx2;
+  if (p.isa == Isa::Avx512) bin_kernel = roi_bin_avx512;
+  else if (p.isa == Isa::Avx2) bin_kernel = roi_bin_avx2;
   RoiSample on_stack[16];
   std::vector<RoiSample> on_heap;
   RoiSample* samples = on_stack;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "nn/models/detection/box_ops.h"
+#include "nn/isa.h"
 #include "nn/tensor.h"
 
 namespace nn::detection {
@@ -14,6 +15,8 @@ struct RoiAlignParams {
   float spatial_scale = 1.0f;
   int sampling_ratio = 2;  // <= 0: adaptive, ceil(roi side / bins)
   bool aligned = false;
+  // The bin kernel; set where the parameters are made, outside any parallel region.
+  Isa isa = active_isa();
 };
 
 // feature: image n of an NHWC map; out: out_h * out_w * C floats in (y, x, c) order.

@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/models/detection/roi_heads.h"
 
 #include <algorithm>
@@ -117,9 +118,10 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
   RoiAlignParams rp;
   rp.out_h = rp.out_w = kPool;
   rp.sampling_ratio = 2;
+  rp.isa = fc6_.isa();
   Profiler::Scope t_pool(prof_, row_pool_);
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
 #endif
   for (int i = 0; i < r; ++i) {
     // LevelMapper in float32: floor(4 + log2(sqrt(area) / 224) + 1e-6), clamped.

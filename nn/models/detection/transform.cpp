@@ -1,3 +1,4 @@
+#include "nn/threads.h"
 #include "nn/models/detection/transform.h"
 
 #include <algorithm>
@@ -41,7 +42,7 @@ void transform_image(const float* image, const ImageSizes& s, const TransformCon
   // element is one subtraction and one division, so the split changes no bit).
   const long long rows = s.orig_h;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) if (!omp_in_parallel() && plane > 65536)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads()) if (!omp_in_parallel() && plane > 65536)
 #endif
   for (long long y = 0; y < rows; ++y) {
     const std::size_t i1 = static_cast<std::size_t>(y + 1) * s.orig_w;
@@ -52,7 +53,7 @@ void transform_image(const float* image, const ImageSizes& s, const TransformCon
                   TensorView{resized, {1, s.resized_h, s.resized_w, 3}});
   const std::size_t row = static_cast<std::size_t>(s.resized_w) * 3;
 #ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) if (!omp_in_parallel() && out.count() > 65536)
+#pragma omp parallel for schedule(static) num_threads(nn::num_threads()) if (!omp_in_parallel() && out.count() > 65536)
 #endif
   for (int y = 0; y < out.shape.h; ++y) {
     float* dst = out.pixel(0, y, 0);
