@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <string>
 
 #include "nn/layout.h"
 #include "nn/resize.h"
@@ -87,17 +88,28 @@ Predictor::Predictor(const nn::StixelNExT& model, const ModelSettings& settings)
   resized_.resize(input_.size());
 }
 
-bool Predictor::preprocess(const std::uint8_t* rgb, int width, int height) {
+bool Predictor::preprocess(const std::uint8_t* rgb, int width, int height, std::size_t stride) {
   static const float kMean[3] = {0.485f, 0.456f, 0.406f}, kStd[3] = {0.229f, 0.224f, 0.225f};
+  if (!rgb) throw Error("image: null pixel pointer");
+  if (width < 1 || height < 1)
+    throw Error("image: size " + std::to_string(width) + "x" + std::to_string(height) + " is empty");
+  const std::size_t row = static_cast<std::size_t>(width) * 3;
+  if (stride < row)
+    throw Error("image: row stride " + std::to_string(stride) + " bytes is less than 3 * width = " +
+                std::to_string(row));
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
   if (image_.size() < pixels * 3) image_.resize(pixels * 3);
   float* x = image_.data();
-  for (std::size_t i = 0; i < pixels * 3; ++i) {
-    const float v = rgb[i];
-    switch (settings_.normalization) {
-      case Normalization::Raw255: x[i] = v; break;
-      case Normalization::Unit: x[i] = v / 255.0f; break;
-      case Normalization::ImageNet: x[i] = (v / 255.0f - kMean[i % 3]) / kStd[i % 3]; break;
+  for (int r = 0; r < height; ++r) {
+    const std::uint8_t* src = rgb + static_cast<std::size_t>(r) * stride;
+    float* dst = x + static_cast<std::size_t>(r) * row;
+    for (std::size_t i = 0; i < row; ++i) {
+      const float v = src[i];
+      switch (settings_.normalization) {
+        case Normalization::Raw255: dst[i] = v; break;
+        case Normalization::Unit: dst[i] = v / 255.0f; break;
+        case Normalization::ImageNet: dst[i] = (v / 255.0f - kMean[i % 3]) / kStd[i % 3]; break;
+      }
     }
   }
   const int h1 = settings_.input_height, w1 = settings_.input_width;
@@ -109,6 +121,10 @@ bool Predictor::preprocess(const std::uint8_t* rgb, int width, int height) {
   }
   nn::nhwc_to_nchw(nhwc, 1, 3, h1, w1, input_.data());
   return resize;
+}
+
+bool Predictor::preprocess(const std::uint8_t* rgb, int width, int height) {
+  return preprocess(rgb, width, height, static_cast<std::size_t>(width > 0 ? width : 0) * 3);
 }
 
 const float* Predictor::run_network() {

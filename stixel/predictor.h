@@ -9,6 +9,7 @@
 //   stixelnext.head           v0..v4 to force a head variant (V1 and V3 look alike)
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -58,7 +59,12 @@ class Predictor {
 
   // Converts interleaved RGB8 pixels of any size into the network input (float,
   // normalised, resized bilinearly like F.interpolate(..., align_corners=False)).
-  // Returns true if the image had to be resized.
+  // Row r starts at rgb + r * stride bytes (stride >= 3 * width; the bytes after a
+  // row's 3 * width are not read); the rows are read in place, never copied.
+  // Returns true if the image had to be resized. Throws Error for a null pointer,
+  // an empty size or a stride below 3 * width.
+  bool preprocess(const std::uint8_t* rgb, int width, int height, std::size_t stride);
+  // Contiguous rows (stride 3 * width).
   bool preprocess(const std::uint8_t* rgb, int width, int height);
   // Runs the network on the preprocessed input; returns [A, 64, U].
   const float* run_network();

@@ -20,7 +20,7 @@
 #include "nn/isa.h"
 #include "nn/resize.h"
 #include "nn/threads.h"
-#include "stixel/clustering.h"
+#include "stixel/frame_pipeline.h"
 #include "stixel/predictor.h"
 #include "stixel/projection.h"
 #include "stixel/render.h"
@@ -188,6 +188,13 @@ int main(int argc, char** argv) {
   int failed = 0, done = 0;
   bool told_resize = false;
   predictor->model().profiler().set_enabled(profile);
+  stixel::FrameOptions fo;  // the per-image pipeline: preprocess, network, extraction, 3D, clustering
+  fo.threshold = threshold;
+  fo.train_focal = train_focal;
+  fo.cluster = cluster;
+  fo.cluster_options.axis_a = axis_a;
+  fo.cluster_options.axis_b = axis_b;
+  if (!calib_path.empty()) fo.camera = stixel::FrameCamera{calib.K, calib.T, calib_path};
   for (std::size_t i = 0; i < images.size(); ++i) {
     const std::string& path = images[i];
     try {
@@ -196,44 +203,26 @@ int main(int argc, char** argv) {
         throw std::runtime_error(path + ": image is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
                                  " but the calibration " + calib_path + " is for " + std::to_string(calib.width) + "x" +
                                  std::to_string(calib.height));
-      const bool resized = timer.time(kPreprocess, [&] { return predictor->preprocess(img.u8.data(), img.width, img.height); });
-      if (resized && !told_resize) {
+      // The note comes before the frame runs, as it always has (even if the frame then fails).
+      if ((img.width != W || img.height != H) && !told_resize) {
         std::fprintf(stderr, "stixelnext: note: %dx%d images are resized to %dx%d (bilinear)%s\n", img.width, img.height,
                      W, H, calib_path.empty() ? "" : " and K is scaled to match");
         told_resize = true;
       }
-      timer.time(kNetwork, [&] { return predictor->run_network(); });
-
-      std::vector<float> K;
-      std::unique_ptr<stixel::Projection> proj;
-      double depth_scale = 1.0;
-      if (!calib_path.empty()) {
-        K = stixel::scale_intrinsics(calib.K, img.width, img.height, W, H);
-        proj = std::make_unique<stixel::Projection>(K, calib.T, calib_path);
-        if (train_focal > 0) depth_scale = stixel::camera_depth_scale(K, train_focal, calib_path);
-      }
-      stixel::StixelWorld world = timer.time(kExtraction, [&] { return predictor->extract(threshold, depth_scale); });
+      stixel::FrameResult frame =
+          stixel::process_frame(*predictor, {img.u8.data(), img.width, img.height, 3 * static_cast<std::size_t>(img.width)}, fo);
+      timer.ms[kPreprocess] += frame.times.preprocess;
+      timer.ms[kNetwork] += frame.times.network;
+      timer.ms[kExtraction] += frame.times.extraction;
+      timer.ms[k3d] += frame.times.points;
+      timer.ms[kClustering] += frame.times.clustering;
+      stixel::StixelWorld& world = frame.world;
       const std::string name = clean_name(stem_of(path));
-      world.has_context = true;
       world.context.name = name;
-      if (proj) {
-        world.context.has_calibration = true;
+      if (frame.projection) {
         auto& c = world.context.calibration;
-        c.K = K;
-        c.T = calib.T;
-        c.width = W;
-        c.height = H;
-        c.channels = 3;
         c.img_name = path.substr(path.find_last_of('/') + 1);
         if (!stixel::is_valid_utf8(c.img_name)) c.img_name = name;
-      }
-      std::vector<stixel::Point3> top;
-      if (proj) top = timer.time(k3d, [&] { return stixel::top_points(world, *proj); });
-      if (cluster) {
-        stixel::ClusterOptions co;
-        co.axis_a = axis_a;
-        co.axis_b = axis_b;
-        timer.time(kClustering, [&] { stixel::cluster_stixels(world, top, co); return 0; });
       }
       stixel::RgbImage bg;
       if (overlay || embed_image) bg = background_at(img, W, H);
@@ -260,7 +249,7 @@ int main(int argc, char** argv) {
           bo.lateral_axis = axis_a;
           bo.forward_axis = axis_b;
           if (cluster) bo.color = stixel::BevOptions::Color::Cluster;
-          auto pic = stixel::render_bev(world, *proj, bo);
+          auto pic = stixel::render_bev(world, *frame.projection, bo);
           imageio::save_png(base + "_bev.png", pic.pixels.data(), pic.width, pic.height, 3);
         }
         return 0;
