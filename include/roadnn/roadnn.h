@@ -150,8 +150,6 @@ ROADNN_API roadnn_session_params roadnn_session_default_params(void);
 ROADNN_API roadnn_status roadnn_session_create(const roadnn_model* model, const roadnn_session_params* params,
                                                roadnn_session** out);
 ROADNN_API void roadnn_session_free(roadnn_session* session);
-/* Bytes of the activation arena (what a session costs beyond the shared weights). */
-ROADNN_API size_t roadnn_session_arena_bytes(const roadnn_session* session);
 
 /* Interleaved 8-bit RGB in the caller's memory. stride: bytes per row, 0 = 3 * width. */
 typedef struct roadnn_image {

@@ -1,0 +1,251 @@
+// roadnn_model_*: loading (file or memory, the same validation), parameters, info.
+#include <sys/stat.h>
+
+#include <cmath>
+#include <functional>
+#include <set>
+
+#include "api/handles.h"
+#include "api/status.h"
+#include "nn/gemm_bf16.h"
+#include "nn/winograd.h"
+#include "stixel/anchors.h"
+
+namespace roadnn_api {
+
+bool is_detector(roadnn_model_kind kind) {
+  return kind == ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_FPN ||
+         kind == ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_320_FPN || kind == ROADNN_MODEL_FASTERRCNN_RESNET50_FPN;
+}
+
+bool is_known_kind(roadnn_model_kind kind) {
+  return kind == ROADNN_MODEL_CONVNEXT || kind == ROADNN_MODEL_STIXELNEXT || is_detector(kind);
+}
+
+const char* kind_name(roadnn_model_kind kind) {
+  switch (kind) {
+    case ROADNN_MODEL_CONVNEXT: return "convnext";
+    case ROADNN_MODEL_STIXELNEXT: return "stixelnext";
+    case ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_FPN: return "fasterrcnn_mobilenet_v3_large_fpn";
+    case ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_320_FPN: return "fasterrcnn_mobilenet_v3_large_320_fpn";
+    case ROADNN_MODEL_FASTERRCNN_RESNET50_FPN: return "fasterrcnn_resnet50_fpn";
+  }
+  return "unknown";
+}
+
+namespace {
+
+nn::detection::FasterRcnnVariant variant_of(roadnn_model_kind kind) {
+  switch (kind) {
+    case ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_320_FPN:
+      return nn::detection::FasterRcnnVariant::MobileNetV3Large320Fpn;
+    case ROADNN_MODEL_FASTERRCNN_RESNET50_FPN: return nn::detection::FasterRcnnVariant::ResNet50Fpn;
+    default: return nn::detection::FasterRcnnVariant::MobileNetV3LargeFpn;
+  }
+}
+
+nn::ExecOptions exec_of(const roadnn_model_params& p) {
+  nn::ExecOptions e;
+  switch (p.max_isa) {
+    case ROADNN_ISA_SCALAR: e.max_isa = nn::Isa::Scalar; break;
+    case ROADNN_ISA_AVX2: e.max_isa = nn::Isa::Avx2; break;
+    case ROADNN_ISA_AVX512:
+    case ROADNN_ISA_BEST: e.max_isa = nn::Isa::Avx512; break;
+    default:
+      fail(ROADNN_ERROR_INVALID_ARGUMENT,
+           "roadnn_model_params.max_isa " + std::to_string(static_cast<int>(p.max_isa)) + " is not a roadnn_isa");
+  }
+  e.max_isa = nn::min_isa(e.max_isa, nn::detect_isa());
+  if (p.winograd != 0 && p.winograd != 1)
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.winograd must be 0 or 1");
+  e.winograd = p.winograd == 1;
+  e.threads = 0;  // loading may pack on all cores
+  return e;
+}
+
+nn::Precision precision_of(const roadnn_model_params& p) {
+  if (p.precision == ROADNN_PRECISION_F32) return nn::Precision::F32;
+  if (p.precision != ROADNN_PRECISION_BF16)
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.precision must be F32 or BF16");
+  if (p.kind != ROADNN_MODEL_CONVNEXT && p.kind != ROADNN_MODEL_STIXELNEXT)
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, std::string("precision bf16 applies to ConvNeXt and StixelNExT++ only, not ") +
+                                            kind_name(p.kind));
+  if (!nn::bf16_gemm_available())
+    fail(ROADNN_ERROR_UNSUPPORTED,
+         "precision bf16 needs AVX512_BF16 and the avx512 kernels; this CPU (or max_isa) does not offer them");
+  return nn::Precision::Bf16;
+}
+
+// The StixelNExT++ settings: the weights' metadata, then the caller's parameters.
+stixel::ModelSettings stixel_settings_of(const roadnn_model_params& p, const weights::SafeTensors& st) {
+  stixel::ModelSettings s = stixel::settings_from_metadata(st.metadata(), st.source());
+  if (p.stixel_head != -1) {
+    if (p.stixel_head < 0 || p.stixel_head > 4)
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.stixel_head must be -1 (detect) or 0..4");
+    s.head = static_cast<nn::StixelHeadVariant>(p.stixel_head);
+  }
+  if (p.input_height != 0 || p.input_width != 0) {
+    if (p.input_height < 32 || p.input_width < 32 || p.input_height > 16384 || p.input_width > 16384)
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.input_height/_width must both be in [32, 16384]");
+    s.input_height = p.input_height;
+    s.input_width = p.input_width;
+  }
+  if (p.stixel_width != 0) {
+    if (p.stixel_width < 1 || p.stixel_width > 1024)
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.stixel_width must be in [1, 1024]");
+    s.stixel_width = p.stixel_width;
+  }
+  if (p.columns != 0) {
+    if (p.columns < 1 || p.columns > 16384)
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.columns must be in [1, 16384]");
+    s.columns = p.columns;
+  }
+  if (p.anchors) s.anchors = stixel::parse_anchor_spec(p.anchors, "roadnn_model_params.anchors");
+  if (p.normalization && !stixel::parse_normalization(p.normalization, &s.normalization))
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.normalization must be raw255, unit or imagenet");
+  if (s.effective_columns() < 1)
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, "the stixel width is wider than the network input");
+  s.precision = precision_of(p);
+  return s;
+}
+
+void warn_unused(roadnn_model* m, const weights::SafeTensors& st, const std::vector<std::string>& used) {
+  const std::set<std::string> known(used.begin(), used.end());
+  std::vector<std::string> unused;
+  for (const auto& n : st.names())
+    if (!known.count(n)) unused.push_back(n);
+  if (unused.empty()) return;
+  std::string list;
+  for (std::size_t i = 0; i < unused.size() && i < 8; ++i) list += (i ? ", " : "") + unused[i];
+  if (unused.size() > 8) list += ", ...";
+  m->warnings.push_back(st.source() + ": " + std::to_string(unused.size()) + " tensors not used by " +
+                        kind_name(m->kind) + ": " + list);
+}
+
+std::size_t tensor_bytes(const weights::SafeTensors& st, const std::vector<weights::TensorSpec>& specs) {
+  std::size_t bytes = 0;
+  for (const auto& s : specs) bytes += st.info(s.name).end - st.info(s.name).begin;
+  return bytes;
+}
+
+std::unique_ptr<roadnn_model> load(const weights::SafeTensors& st, const roadnn_model_params& p) {
+  if (!is_known_kind(p.kind))
+    fail(ROADNN_ERROR_INVALID_ARGUMENT,
+         "roadnn_model_params.kind " + std::to_string(static_cast<int>(p.kind)) + " is not a roadnn_model_kind");
+  if (!(p.box_score_thresh < 0 || (p.box_score_thresh >= 0 && p.box_score_thresh <= 1)))
+    fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.box_score_thresh must be < 0 (default) or in [0, 1]");
+  auto m = std::make_unique<roadnn_model>();
+  m->kind = p.kind;
+  m->exec = exec_of(p);
+  nn::ExecScope scope(m->exec);  // packing sees the model's ISA cap and Winograd choice
+  if (p.kind == ROADNN_MODEL_CONVNEXT) {
+    auto model = std::make_shared<const nn::ConvNeXt>(st, "features.", precision_of(p));
+    std::vector<std::string> used;
+    for (const auto& s : nn::convnext_tensor_specs(model->config(), "features.")) used.push_back(s.name);
+    warn_unused(m.get(), st, used);
+    m->weight_bytes = model->weight_bytes();
+    m->convnext = std::move(model);
+  } else if (p.kind == ROADNN_MODEL_STIXELNEXT) {
+    m->stixel_settings = stixel_settings_of(p, st);
+    auto model = std::make_shared<const nn::StixelNExT>(st, m->stixel_settings.head, m->stixel_settings.precision);
+    if (m->stixel_settings.anchors.size() != nn::StixelHead::kCandidates)
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, "the head predicts 64 candidates but the anchor set has " +
+                                              std::to_string(m->stixel_settings.anchors.size()));
+    m->stixel_settings.head = model->head().variant();
+    warn_unused(m.get(), st, model->used_tensors());
+    m->weight_bytes = model->backbone().weight_bytes() + model->head().weight_bytes();
+    m->stixelnext = std::move(model);
+  } else {
+    const auto v = variant_of(p.kind);
+    nn::detection::FasterRcnnConfig cfg = nn::detection::faster_rcnn_defaults(v);
+    if (p.box_score_thresh >= 0) cfg.roi_heads.score_thresh = p.box_score_thresh;
+    auto model = std::make_shared<const nn::detection::FasterRcnn>(st, v, cfg);
+    std::vector<std::string> used;
+    for (const auto& s : model->tensor_specs()) used.push_back(s.name);
+    warn_unused(m.get(), st, used);
+    m->weight_bytes = tensor_bytes(st, model->tensor_specs());
+    m->detector = std::move(model);
+  }
+  return m;
+}
+
+roadnn_status load_guarded(const char* function, roadnn_model** out, const roadnn_model_params* params,
+                           const std::function<weights::SafeTensors()>& read) {
+  if (out) *out = nullptr;
+  return guarded(ROADNN_ERROR_BAD_MODEL, [&] {
+    require(out, function, "out");
+    require(params, function, "params");
+    weights::SafeTensors st = read();
+    *out = load(st, *params).release();
+  });
+}
+
+}  // namespace
+}  // namespace roadnn_api
+
+using namespace roadnn_api;
+
+extern "C" {
+
+roadnn_model_params roadnn_model_default_params(roadnn_model_kind kind) {
+  roadnn_model_params p;
+  p.kind = kind;
+  p.max_isa = ROADNN_ISA_BEST;
+  p.winograd = 1;
+  p.precision = ROADNN_PRECISION_F32;
+  p.stixel_head = -1;
+  p.input_height = p.input_width = 0;
+  p.columns = p.stixel_width = 0;
+  p.anchors = nullptr;
+  p.normalization = nullptr;
+  p.box_score_thresh = -1.0f;
+  return p;
+}
+
+roadnn_status roadnn_model_load_file(const char* path, const roadnn_model_params* params, roadnn_model** out) {
+  return load_guarded("roadnn_model_load_file", out, params, [&] {
+    require(path, "roadnn_model_load_file", "path");
+    struct stat sb;
+    if (stat(path, &sb) != 0) fail(ROADNN_ERROR_IO, std::string(path) + ": cannot open (no such file or no access)");
+    if (!S_ISREG(sb.st_mode)) fail(ROADNN_ERROR_IO, std::string(path) + ": not a regular file");
+    return weights::SafeTensors::load(path);
+  });
+}
+
+roadnn_status roadnn_model_load_memory(const void* data, size_t size, const roadnn_model_params* params,
+                                       roadnn_model** out) {
+  return load_guarded("roadnn_model_load_memory", out, params, [&] {
+    require(data, "roadnn_model_load_memory", "data");
+    if (size == 0) fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_load_memory: size is 0");
+    const auto* bytes = static_cast<const std::uint8_t*>(data);
+    return weights::SafeTensors::from_bytes(std::vector<std::uint8_t>(bytes, bytes + size), "<memory>");
+  });
+}
+
+void roadnn_model_free(roadnn_model* model) { delete model; }
+
+roadnn_status roadnn_model_get_info(const roadnn_model* model, roadnn_model_info* out) {
+  return guarded(ROADNN_ERROR_INVALID_ARGUMENT, [&] {
+    require(model, "roadnn_model_get_info", "model");
+    require(out, "roadnn_model_get_info", "out");
+    roadnn_model_info info;
+    info.kind = model->kind;
+    info.kernels = nn::isa_name(model->exec.max_isa);
+    info.weight_bytes = model->weight_bytes;
+    info.num_classes = model->detector ? model->detector->num_classes() : 0;
+    info.input_height = model->stixelnext ? model->stixel_settings.input_height : 0;
+    info.input_width = model->stixelnext ? model->stixel_settings.input_width : 0;
+    info.columns = model->stixelnext ? model->stixel_settings.effective_columns() : 0;
+    info.stixel_head = model->stixelnext ? nn::stixel_head_name(model->stixelnext->head().variant()) : "";
+    *out = info;
+  });
+}
+
+size_t roadnn_model_warning_count(const roadnn_model* model) { return model ? model->warnings.size() : 0; }
+
+const char* roadnn_model_warning(const roadnn_model* model, size_t index) {
+  if (!model || index >= model->warnings.size()) return nullptr;
+  return model->warnings[index].c_str();
+}
+
+}  // extern "C"
