@@ -37,31 +37,81 @@ DisparityMap load_disparity(const FrameFiles& f, const Calibration& cal, FrameLo
   throw Error(f.problem.empty() ? f.image + ": no disparity file" : f.problem);
 }
 
-SceneHeights smooth_heights(const std::vector<double>& raw, const TemporalOptions& o) {
-  SceneHeights s;
-  s.raw = raw;
-  if (!o.use_kalman)
-    s.filtered = raw;
-  else if (o.kalman_compat)
-    s.filtered = geometry::kalman_smooth_released(raw, o.kalman);
-  else
-    s.filtered = geometry::kalman_smooth(raw, o.kalman);
-  if (!s.filtered.empty()) {
-    double sum = 0;
-    for (double v : s.filtered) sum += v;
-    s.scene_height = sum / static_cast<double>(s.filtered.size());
-    s.has_scene_height = true;
-  }
-  return s;
-}
-
-SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource& source, FrameLoader& loader,
-                         const PipelineOptions& opt, const Progress& progress) {
+void validate(const PipelineOptions& opt) {
   validate(opt.height);
   if (opt.ncc.search_radius < 1 || !(opt.mil.search_radius >= 1))
     throw Error("tracker search radius must be >= 1");
   if (opt.has_gt_height && (!(opt.gt_height > 0) || !std::isfinite(opt.gt_height)))
     throw Error("ground-truth height must be > 0");
+  make_tracker(opt.tracker, opt.ncc, opt.mil);  // throws for an unknown kind
+}
+
+TemporalFilter::TemporalFilter(const TemporalOptions& o) : opt_(o), kalman_(o.kalman) {
+  if (o.use_kalman && o.kalman_compat)
+    throw Error("the released Kalman off-by-one (kalman_compat) cannot be computed one frame at a time");
+}
+
+double TemporalFilter::add(double raw) {
+  const double v = opt_.use_kalman ? kalman_.update(raw) : raw;
+  sum_ += v;
+  ++count_;
+  return v;
+}
+
+void TemporalFilter::reset() {
+  kalman_ = geometry::ScalarKalman(opt_.kalman);
+  sum_ = 0;
+  count_ = 0;
+}
+
+SceneHeights smooth_heights(const std::vector<double>& raw, const TemporalOptions& o) {
+  SceneHeights s;
+  s.raw = raw;
+  if (o.use_kalman && o.kalman_compat) {
+    s.filtered = geometry::kalman_smooth_released(raw, o.kalman);
+    if (!s.filtered.empty()) {
+      double sum = 0;
+      for (double v : s.filtered) sum += v;
+      s.scene_height = sum / static_cast<double>(s.filtered.size());
+      s.has_scene_height = true;
+    }
+    return s;
+  }
+  TemporalFilter f(o);
+  s.filtered.reserve(raw.size());
+  for (double v : raw) s.filtered.push_back(f.add(v));
+  s.has_scene_height = f.has_mean();
+  s.scene_height = f.mean();
+  return s;
+}
+
+std::string disparity_mismatch(const DisparityMap& d, int width, int height, const std::string& frame_what) {
+  const std::string size = std::to_string(d.width) + "x" + std::to_string(d.height);
+  if (d.width != width || d.height != height)
+    return "disparity is " + size + " but the " + frame_what + " is " + std::to_string(width) + "x" +
+           std::to_string(height);
+  if (d.width < 0 || d.height < 0 || d.d.size() != static_cast<std::size_t>(d.width) * d.height)
+    return "disparity map of " + size + " holds " + std::to_string(d.d.size()) + " samples";
+  return "";
+}
+
+HeightResult frame_stage2(HeightEstimator& estimator, const DisparityMap* disp, const Box& box, int width,
+                          int height, const std::string& frame_name, std::vector<std::string>* problems) {
+  HeightResult r;
+  if (disp) {
+    r = estimator.estimate(*disp, box);
+    if (!r.has_height) problems->push_back(frame_name + ": no height: " + r.problem);
+  } else {
+    const HeightOptions& h = estimator.options();
+    r.window = extend_and_clip(box, h.extend_top, h.extend_bottom, width, height);
+    r.problem = "no disparity";
+  }
+  return r;
+}
+
+SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource& source, FrameLoader& loader,
+                         const PipelineOptions& opt, const Progress& progress) {
+  validate(opt);
   std::unique_ptr<Tracker> tracker = make_tracker(opt.tracker, opt.ncc, opt.mil);
   HeightEstimator estimator(cal, opt.height);
   const Clock::time_point t_start = Clock::now();
@@ -173,22 +223,17 @@ SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource&
         r.problems.push_back(describe(e));
       }
       r.ms_load = ms_since(t0);
-      if (have_disp && (disp.width != width[i] || disp.height != height[i])) {
-        r.problems.push_back(f.disparity + ": disparity is " + std::to_string(disp.width) + "x" +
-                             std::to_string(disp.height) + " but the image is " + std::to_string(width[i]) + "x" +
-                             std::to_string(height[i]));
-        have_disp = false;
-      }
       if (have_disp) {
-        Clock::time_point t1 = Clock::now();
-        r.stage2 = estimator.estimate(disp, r.box);
-        r.ms_stage2 = ms_since(t1);
-        if (!r.stage2.has_height) r.problems.push_back(f.image_name + ": no height: " + r.stage2.problem);
-      } else {
-        r.stage2.window = extend_and_clip(r.box, opt.height.extend_top, opt.height.extend_bottom, width[i],
-                                          height[i]);
-        r.stage2.problem = "no disparity";
+        std::string mismatch = disparity_mismatch(disp, width[i], height[i], "image");
+        if (!mismatch.empty()) {
+          r.problems.push_back(f.disparity + ": " + mismatch);
+          have_disp = false;
+        }
       }
+      Clock::time_point t1 = Clock::now();
+      r.stage2 = frame_stage2(estimator, have_disp ? &disp : nullptr, r.box, width[i], height[i], f.image_name,
+                              &r.problems);
+      if (have_disp) r.ms_stage2 = ms_since(t1);
     }
     if (progress) progress(i + 1, n);
   }

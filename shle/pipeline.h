@@ -34,9 +34,17 @@ struct PipelineOptions {
   std::string tracker = "ncc";  // "ncc", "mil" or "none"
   NccOptions ncc;
   MilOptions mil;
+  // StreamEstimator only (shle/stream.h): frames without a box tracked after the
+  // last box, 0 = no limit. run_sequence ignores it: it tracks only through gaps
+  // between two boxes, however long.
+  int max_track_frames = 30;
   bool has_gt_height = false;
   double gt_height = 0;
 };
+
+// The checks run_sequence and StreamEstimator make: stage-2 options, tracker
+// kind and search radius, ground-truth height. Throws shle::Error.
+void validate(const PipelineOptions& options);
 
 class FrameLoader {
  public:
@@ -77,6 +85,42 @@ struct SceneHeights {
 
 // The temporal stage alone: Kalman (or not) over the raw heights.
 SceneHeights smooth_heights(const std::vector<double>& raw, const TemporalOptions& options);
+
+// The temporal stage one raw height at a time, as smooth_heights computes it
+// (same operations in the same order, so the same bits): the filtered height
+// (Kalman, or the raw height with use_kalman = false) and the scene height so
+// far, the mean of the filtered heights. The kalman_compat mode cannot run this
+// way (its value i is the estimate after measurement i + 1, and its last value
+// is 0): the constructor throws shle::Error for it.
+class TemporalFilter {
+ public:
+  explicit TemporalFilter(const TemporalOptions& options);
+  double add(double raw);  // returns the filtered height
+  void reset();
+  std::size_t count() const { return count_; }
+  bool has_mean() const { return count_ > 0; }
+  double mean() const { return count_ ? sum_ / static_cast<double>(count_) : 0.0; }
+
+ private:
+  TemporalOptions opt_;
+  geometry::ScalarKalman kalman_;
+  double sum_ = 0;
+  std::size_t count_ = 0;
+};
+
+// Stage 2 on one frame with a box, as run_sequence and StreamEstimator run it.
+// `disparity` is null when the frame has no usable map (the reason is already
+// in `problems`): the result then has no height, problem "no disparity", and
+// the window of the box extended and clipped to width x height. Otherwise
+// `disparity` must be width x height (see disparity_mismatch). A frame without
+// a height adds "<frame_name>: no height: <reason>" to `problems`.
+HeightResult frame_stage2(HeightEstimator& estimator, const DisparityMap* disparity, const Box& box, int width,
+                          int height, const std::string& frame_name, std::vector<std::string>* problems);
+
+// "" when `disparity` is width x height and holds that many samples; otherwise
+// "disparity is WxH but the <frame_what> is WxH" (or, for a map whose buffer
+// does not match its size, "disparity map of WxH holds N samples").
+std::string disparity_mismatch(const DisparityMap& disparity, int width, int height, const std::string& frame_what);
 
 struct SequenceRun {
   std::vector<FrameRecord> frames;

@@ -51,6 +51,9 @@ struct GrayView {
 inline GrayView view(const GrayImage& g) { return GrayView{g.width, g.height, g.px.data()}; }
 
 // Luma with the ITU-R BT.601 integer weights (77 R + 150 G + 29 B + 128) >> 8.
+// `rgb` must hold width * height * 3 bytes.
 GrayImage to_gray(const RgbImage& rgb);
+// The same into `out`, reusing its storage.
+void to_gray(const RgbImage& rgb, GrayImage* out);
 
 }  // namespace shle
