@@ -184,15 +184,13 @@ void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView&
   const int block = std::max(1, (h + wanted - 1) / wanted);
   const int blocks_per_image = (h + block - 1) / block;
   const int blocks = out.shape.n * blocks_per_image;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (int b = 0; b < blocks; ++b) {
+  parallel_for(blocks, true, [&](long long b_) {
+    const int b = static_cast<int>(b_);
     float* mine = scratch ? scratch + per_thread * thread_index() : nullptr;
     const int n = b / blocks_per_image, y0 = (b % blocks_per_image) * block;
     const int y1 = std::min(h, y0 + block);
     conv2d_rows(in, w, out, n, y0, y1, mine, act, residual, act_after_residual);
-  }
+  });
 }
 
 void conv2d_ref(const ConstTensorView& in, const float* w, const float* bias,

@@ -174,11 +174,10 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
 
   if (w.isa() == Isa::Scalar) {
     const long long rows = static_cast<long long>(os.n) * os.h;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows > 1)
-#endif
-    for (long long r = 0; r < rows; ++r)
+    parallel_for(rows, rows > 1, [&](long long r_) {
+      const long long r = static_cast<long long>(r_);
       dwconv_rows_scalar(in, w, out, static_cast<int>(r / os.h), static_cast<int>(r % os.h));
+    });
     return;
   }
 
@@ -220,17 +219,15 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
   const int group = (blocks + groups - 1) / groups;
   groups = (blocks + group - 1) / group;
   const long long items = static_cast<long long>(os.n) * chunks * groups;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1)
-#endif
-  for (long long i = 0; i < items; ++i) {
+  parallel_for(items, items > 1, [&](long long i_) {
+    const long long i = static_cast<long long>(i_);
     const int n = static_cast<int>(i / (chunks * groups));
     const int y0 = static_cast<int>(i / groups % chunks) * chunk;
     const int y1 = y0 + chunk < os.h ? y0 + chunk : os.h;
     const int g0 = static_cast<int>(i % groups) * group;
     const int g1 = g0 + group < blocks ? g0 + group : blocks;
     block(job, n, g0, g1, y0, y1);
-  }
+  });
 }
 
 void dwconv_ref(const ConstTensorView& in, const float* w, const float* bias,

@@ -299,15 +299,13 @@ void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, 
     if (m < 64 * threads || (m < 128 * threads && panels >= 4 * threads))
       tn = std::min(threads, panels);
     const int tm = std::max(1, std::min(threads / tn, row_tiles));
-#pragma omp parallel num_threads(tm * tn)
-    {
-      const int id = omp_get_thread_num();
+    parallel_team(tm * tn, [&](int id, int) {
       const int im = id / tn, in = id % tn;
       const int rows_per = (row_tiles + tm - 1) / tm * mr;
       const int r0 = std::min(m, im * rows_per), r1 = std::min(m, r0 + rows_per);
       const int p0 = in * panels / tn, p1 = (in + 1) * panels / tn;
       if (r0 < r1 && p0 < p1) gemm_blocked(r0, r1, p0, p1, a, lda, w, c, ldc, ep);
-    }
+    });
     return;
   }
 #endif

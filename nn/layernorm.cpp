@@ -95,13 +95,13 @@ void layernorm_parallel(std::size_t rows, int c, const float* x, std::ptrdiff_t 
     std::size_t chunk = ((rows + chunks - 1) / chunks + 3) / 4 * 4;
     if (chunk < min_rows) chunk = min_rows;
     const long long n = static_cast<long long>((rows + chunk - 1) / chunk);
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (long long i = 0; i < n; ++i) {
+    parallel_for(n, true, [&](long long i_) {
+      const long long i = static_cast<long long>(i_);
       const std::size_t r0 = static_cast<std::size_t>(i) * chunk;
       const std::size_t r1 = r0 + chunk < rows ? r0 + chunk : rows;
       layernorm(r1 - r0, c, x + static_cast<std::ptrdiff_t>(r0) * ldx, ldx,
                 y + static_cast<std::ptrdiff_t>(r0) * ldy, ldy, gamma, beta, eps, isa);
-    }
+    });
     return;
   }
 #endif

@@ -44,11 +44,8 @@ void transpose_rows_strided(const float* src, float* dst, long long planes, long
                             long long cols) {
   const long long col_tiles = (cols + kWide - 1) / kWide;
   const long long items = planes * col_tiles;
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && planes * rows * cols > 65536)
-#endif
-  for (long long it = 0; it < items; ++it) {
+  parallel_for(items, planes * rows * cols > 65536, [&](long long it_) {
+    const long long it = static_cast<long long>(it_);
     const float* s = src + it / col_tiles * rows * cols;
     float* d = dst + it / col_tiles * rows * cols;
     const long long j0 = it % col_tiles * kWide;
@@ -58,7 +55,7 @@ void transpose_rows_strided(const float* src, float* dst, long long planes, long
       for (long long j = j0; j < j1; ++j)
         for (long long i = i0; i < i1; ++i) d[j * rows + i] = s[i * cols + j];
     }
-  }
+  });
 }
 
 // The same where cols is the large stride of the destination (NHWC -> NCHW: rows =
@@ -67,11 +64,8 @@ void transpose_cols_strided(const float* src, float* dst, long long planes, long
                             long long cols) {
   const long long row_tiles = (rows + kWide - 1) / kWide;
   const long long items = planes * row_tiles;
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && planes * rows * cols > 65536)
-#endif
-  for (long long it = 0; it < items; ++it) {
+  parallel_for(items, planes * rows * cols > 65536, [&](long long it_) {
+    const long long it = static_cast<long long>(it_);
     const float* s = src + it / row_tiles * rows * cols;
     float* d = dst + it / row_tiles * rows * cols;
     const long long i0 = it % row_tiles * kWide;
@@ -81,7 +75,7 @@ void transpose_cols_strided(const float* src, float* dst, long long planes, long
       for (long long j = j0; j < j1; ++j)
         for (long long i = i0; i < i1; ++i) d[j * rows + i] = s[i * cols + j];
     }
-  }
+  });
 }
 
 }  // namespace

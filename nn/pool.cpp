@@ -48,11 +48,8 @@ void mean_over_rows(const ConstTensorView& in, const TensorView& out) {
   const long long slices = (row + kSlice - 1) / kSlice;
   const long long items = s.n * slices;
   const float h = static_cast<float>(s.h);
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1 && s.count() > 65536)
-#endif
-  for (long long it = 0; it < items; ++it) {
+  parallel_for(items, items > 1 && s.count() > 65536, [&](long long it_) {
+    const long long it = static_cast<long long>(it_);
     const long long n = it / slices;
     const long long b = it % slices * kSlice;
     const long long e = b + kSlice < row ? b + kSlice : row;
@@ -62,7 +59,7 @@ void mean_over_rows(const ConstTensorView& in, const TensorView& out) {
     for (int y = 0; y < s.h; ++y)
       for (long long i = b; i < e; ++i) dst[i] += src[y * row + i];
     for (long long i = b; i < e; ++i) dst[i] /= h;
-  }
+  });
 }
 
 Shape max_pool2d_output_shape(const Shape& in, const MaxPoolParams& p) {
@@ -87,11 +84,8 @@ void max_pool2d(const ConstTensorView& in, const MaxPoolParams& p, const TensorV
   const Shape& s = in.shape;
   const Shape& os = out.shape;
   const long long rows = static_cast<long long>(os.n) * os.h;
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows > 1 && out.count() > 16384)
-#endif
-  for (long long r = 0; r < rows; ++r) {
+  parallel_for(rows, rows > 1 && out.count() > 16384, [&](long long r_) {
+    const long long r = static_cast<long long>(r_);
     const int n = static_cast<int>(r / os.h), oy = static_cast<int>(r % os.h);
     const int y0 = oy * p.stride_h - p.pad_h;
     const int ya = y0 < 0 ? 0 : y0;
@@ -120,7 +114,7 @@ void max_pool2d(const ConstTensorView& in, const MaxPoolParams& p, const TensorV
         for (int i = 0; i < cn; ++i) dst[c0 + i] = m[i];
       }
     }
-  }
+  });
 }
 
 Shape global_avg_pool_shape(const Shape& in) {
@@ -141,17 +135,14 @@ void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
       const int cn = s.c - c0 < kSlice ? s.c - c0 : kSlice;
       double partial[kParts][kSlice];
       const float* src = in.data + n * pixels * s.c + c0;
-#ifdef ROADNN_OPENMP
-      const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && pixels * cn > 65536)
-#endif
-      for (int part = 0; part < kParts; ++part) {
+      parallel_for(kParts, pixels * cn > 65536, [&](long long part_) {
+        const int part = static_cast<int>(part_);
         double* acc = partial[part];
         for (int i = 0; i < cn; ++i) acc[i] = 0.0;
         const long long p1 = pixels * (part + 1) / kParts;
         for (long long px = pixels * part / kParts; px < p1; ++px)
           for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + i];
-      }
+      });
       float* dst = out.data + static_cast<std::size_t>(n) * s.c + c0;
       for (int i = 0; i < cn; ++i) {
         double sum = 0.0;

@@ -86,18 +86,15 @@ void upsample_nearest(const ConstTensorView& in, const TensorView& out, double s
   const float sh = axis_scale(is.h, os.h, scale_h), sw = axis_scale(is.w, os.w, scale_w);
   const long long rows = static_cast<long long>(os.n) * os.h;
   const std::size_t bytes = static_cast<std::size_t>(is.c) * sizeof(float);
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows > 1 && out.count() > 65536)
-#endif
-  for (long long r = 0; r < rows; ++r) {
+  parallel_for(rows, rows > 1 && out.count() > 65536, [&](long long r_) {
+    const long long r = static_cast<long long>(r_);
     const int n = static_cast<int>(r / os.h), oy = static_cast<int>(r % os.h);
     const int iy = static_cast<int>(nearest_src(oy, is.h, os.h, sh));
     for (int ox = 0; ox < os.w; ++ox) {
       const int ix = static_cast<int>(nearest_src(ox, is.w, os.w, sw));
       std::memcpy(out.pixel(n, oy, ox), in.pixel(n, iy, ix), bytes);
     }
-  }
+  });
 }
 
 void resize_bilinear(const ConstTensorView& in, const TensorView& out, double scale_h,
@@ -112,11 +109,8 @@ void resize_bilinear(const ConstTensorView& in, const TensorView& out, double sc
   constexpr int kChunk = 8, kSeg = 128;
   const long long chunks = (os.h + kChunk - 1) / kChunk;
   const long long items = os.n * chunks;
-#ifdef ROADNN_OPENMP
-  const int threads = team_size();
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && items > 1 && out.count() > 65536)
-#endif
-  for (long long it = 0; it < items; ++it) {
+  parallel_for(items, items > 1 && out.count() > 65536, [&](long long it_) {
+    const long long it = static_cast<long long>(it_);
     const int n = static_cast<int>(it / chunks);
     const int oy0 = static_cast<int>(it % chunks) * kChunk;
     const int oy1 = oy0 + kChunk < os.h ? oy0 + kChunk : os.h;
@@ -142,7 +136,7 @@ void resize_bilinear(const ConstTensorView& in, const TensorView& out, double sc
           bilinear_row_scalar(row0, row1, y.l0, y.l1, x0, x1, w0, w1, count, is.c, dst);
       }
     }
-  }
+  });
 }
 
 }  // namespace nn

@@ -144,12 +144,10 @@ void winograd_conv2d(const ConstTensorView& in, const WinogradWeights& w, const 
   const OutputFn output = output_fn(w.isa());
   const bool fused_act = act == Act::None || act == Act::Relu;
   const std::ptrdiff_t vs = static_cast<std::ptrdiff_t>(tmax) * cin, ms = static_cast<std::ptrdiff_t>(tmax) * cout;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (long b = 0; b < blocks; ++b) {
+  parallel_for(blocks, true, [&](long long b_) {
+    const long b = static_cast<long>(b_);
     const long t0 = b * per_block, t1 = std::min(tiles, t0 + per_block);
-    if (t0 >= t1) continue;
+    if (t0 >= t1) return;
     float* v = scratch + per_thread * thread_index();
     float* m = v + round16(36 * static_cast<std::size_t>(tmax) * cin);
     float* zero = m + round16(36 * static_cast<std::size_t>(tmax) * cout);
@@ -209,7 +207,7 @@ void winograd_conv2d(const ConstTensorView& in, const WinogradWeights& w, const 
         if (act_after_residual) apply_act(act, px, cout, w.isa());
       }
     }
-  }
+  });
 }
 
 }  // namespace nn

@@ -299,10 +299,8 @@ void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
   const int chunks = s.n * per_image;
   GemmEpilogue ep;
   ep.bias = stem_b_.data();
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (int ci = 0; ci < chunks; ++ci) {
+  parallel_for(chunks, true, [&](long long ci_) {
+    const int ci = static_cast<int>(ci_);
     float* col = scratch_.data() + scratch_per_thread_ * thread_index();
     const int n = ci / per_image, y0 = ci % per_image * stem_chunk_;
     const int y1 = std::min(s.h, y0 + stem_chunk_);
@@ -318,7 +316,7 @@ void ConvNeXt::run_stem(const float* input_nchw, Shape s) {
     float* out = act_a_.data() + ((static_cast<std::size_t>(n) * s.h + y0) * ow) * c0;
     gemm(rows, col, 48, stem_w_, out, c0, ep);
     layernorm(rows, c0, out, c0, out, c0, stem_gamma_.data(), stem_beta_.data(), cfg_.eps, stem_w_.isa());
-  }
+  });
 }
 
 // Downsampling: LayerNorm (gamma/beta folded into the conv) written straight into the
@@ -343,20 +341,17 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
   ep.bias = st.down.bias();
   if (st.down_whole) {
     const int rows = s.n * s.h;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-    for (int r = 0; r < rows; ++r)
+    parallel_for(rows, true, [&](long long r_) {
+      const int r = static_cast<int>(r_);
       im2col(r / s.h, r % s.h, scratch_.data() + static_cast<std::size_t>(r) * ow * patch);
+    });
     gemm_parallel(rows * ow, scratch_.data(), patch, st.down.gemm(), act_b_.data(), s.c, ep);
     return;
   }
   const int per_image = (s.h + st.down_chunk - 1) / st.down_chunk;
   const int chunks = s.n * per_image;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (int ci = 0; ci < chunks; ++ci) {
+  parallel_for(chunks, true, [&](long long ci_) {
+    const int ci = static_cast<int>(ci_);
     float* col = scratch_.data() + scratch_per_thread_ * thread_index();
     const int n = ci / per_image, y0 = ci % per_image * st.down_chunk;
     const int y1 = std::min(s.h, y0 + st.down_chunk);
@@ -364,7 +359,7 @@ void ConvNeXt::run_down(const Stage& st, Shape prev, Shape s) {
       im2col(n, oy, col + static_cast<std::size_t>(oy - y0) * ow * patch);
     float* out = act_b_.data() + ((static_cast<std::size_t>(n) * s.h + y0) * ow) * s.c;
     gemm((y1 - y0) * ow, col, patch, st.down.gemm(), out, s.c, ep);
-  }
+  });
 }
 
 namespace {
@@ -378,14 +373,12 @@ void convert_rows_parallel(std::size_t rows, int cols, const float* src, bf16* d
                            std::size_t ldd) {
   const std::size_t chunk = 16;
   const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>((rows + chunk - 1) / chunk);
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (std::ptrdiff_t i = 0; i < chunks; ++i) {
+  parallel_for(chunks, true, [&](long long i_) {
+    const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(i_);
     const std::size_t r0 = static_cast<std::size_t>(i) * chunk, r1 = std::min(rows, r0 + chunk);
     convert_to_bf16(static_cast<int>(r1 - r0), cols, src + r0 * cols, cols, dst + r0 * ldd,
                     static_cast<std::ptrdiff_t>(ldd));
-  }
+  });
 }
 
 }  // namespace
@@ -446,22 +439,14 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
     // Each thread takes an equal contiguous share of 8-row groups (whole tiles would
     // leave one thread a tile more: 7 against 6 at 28x28) and runs it in tiles of
     // `tile` rows. A row's result does not depend on its tile.
-#ifdef ROADNN_OPENMP
-#pragma omp parallel num_threads(nn::num_threads())
-#endif
-    {
-      int id = 0, team = 1;
-#ifdef ROADNN_OPENMP
-      id = omp_get_thread_num();
-      team = omp_get_num_threads();
-#endif
+    parallel_team(team_size(), [&](int id, int team) {
       const std::size_t groups = (m + 7) / 8;
       const std::size_t r0 = std::min(m, groups * id / team * 8);
       const std::size_t r1 = std::min(m, groups * (id + 1) / team * 8);
       const MlpScratch sc = mlp_scratch(scratch_.data() + scratch_per_thread_ * id, tile, c);
       for (std::size_t m0 = r0; m0 < r1; m0 += tile)
         run_mlp_rows(b, c, m0, std::min(r1, m0 + tile), sc);
-    }
+    });
     return;
   }
   const MlpScratch sc = mlp_scratch(scratch_.data(), m, c);

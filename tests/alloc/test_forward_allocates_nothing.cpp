@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
 #include <new>
 
@@ -13,27 +14,65 @@
 #include "nn/models/stixelnext.h"
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
+#include "roadnn/roadnn.h"
 
 namespace {
 std::atomic<long> g_allocations{0};
 std::atomic<bool> g_counting{false};
-}  // namespace
 
-void* operator new(std::size_t n) {
+void count_allocation() {
   if (g_counting) {
     ++g_allocations;
     // ROADNN_ALLOC_ABORT=1 stops at the offending allocation, so gdb's backtrace names it.
     if (std::getenv("ROADNN_ALLOC_ABORT")) std::abort();
   }
+}
+}  // namespace
+
+// The C allocator itself is interposed (glibc's own entry points do the work), so
+// malloc/calloc/realloc/aligned_alloc/posix_memalign calls from C code, OpenMP or
+// the engine's AlignedBuffer count too, not only operator new (which calls malloc).
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+
+void* malloc(std::size_t n) {
+  count_allocation();
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  count_allocation();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t n) {
+  count_allocation();
+  return __libc_realloc(p, n);
+}
+void* aligned_alloc(std::size_t align, std::size_t n) {
+  count_allocation();
+  return __libc_memalign(align, n);
+}
+void* memalign(std::size_t align, std::size_t n) {
+  count_allocation();
+  return __libc_memalign(align, n);
+}
+int posix_memalign(void** out, std::size_t align, std::size_t n) {
+  count_allocation();
+  void* p = __libc_memalign(align, n);
+  if (!p) return ENOMEM;
+  *out = p;
+  return 0;
+}
+void free(void* p) { __libc_free(p); }
+}
+
+void* operator new(std::size_t n) {
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
 namespace {
 
 void benchmark_sink(volatile float* p) { p[0] = 1.0f; }
@@ -51,6 +90,18 @@ long allocations_during(const std::function<void()>& f) {
 // The counter itself works (otherwise the tests below could not fail).
 TEST(NoAllocation, CounterSeesAllocations) {
   EXPECT_GE(allocations_during([] { std::vector<float> v(1000); benchmark_sink(v.data()); }), 1);
+  EXPECT_GE(allocations_during([] {
+              void* p = std::aligned_alloc(64, 4096);
+              benchmark_sink(static_cast<float*>(p));
+              std::free(p);
+            }),
+            1);
+  EXPECT_GE(allocations_during([] {
+              void* p = std::malloc(100);
+              benchmark_sink(static_cast<float*>(p));
+              std::free(p);
+            }),
+            1);
 }
 
 TEST(NoAllocation, ConvNeXtForward) {
@@ -122,6 +173,63 @@ TEST(NoAllocation, FasterRcnnForwardEveryVariant) {
     }
   }
   nn::set_num_threads(0);
+}
+
+}  // namespace
+
+// Through the C API: a session's run allocates nothing either (after its first run,
+// which sizes the detector's input staging and result arrays).
+namespace {
+
+struct ApiModel {
+  roadnn_model* model = nullptr;
+  roadnn_session* session = nullptr;
+  ~ApiModel() {
+    roadnn_session_free(session);
+    roadnn_model_free(model);
+  }
+};
+
+TEST(NoAllocation, CApiConvNeXtRun) {
+  const auto bytes = nn::synthetic_weights(nn::convnext_tensor_specs(small(), "features."), 1).bytes();
+  for (int threads : {1, 2}) {
+    ApiModel m;
+    const roadnn_model_params mp = roadnn_model_default_params(ROADNN_MODEL_CONVNEXT);
+    ASSERT_EQ(ROADNN_OK, roadnn_model_load_memory(bytes.data(), bytes.size(), &mp, &m.model)) << roadnn_last_error();
+    roadnn_session_params sp = roadnn_session_default_params();
+    sp.threads = threads;
+    sp.height = 96, sp.width = 128;
+    ASSERT_EQ(ROADNN_OK, roadnn_session_create(m.model, &sp, &m.session)) << roadnn_last_error();
+    std::int64_t shape[4];
+    ASSERT_EQ(ROADNN_OK, roadnn_convnext_output_shape(m.session, shape));
+    std::vector<float> x(3 * 96 * 128, 0.5f), y(shape[0] * shape[1] * shape[2] * shape[3]);
+    ASSERT_EQ(ROADNN_OK, roadnn_convnext_run(m.session, x.data(), x.size(), y.data(), y.size()));
+    EXPECT_EQ(0, allocations_during([&] { roadnn_convnext_run(m.session, x.data(), x.size(), y.data(), y.size()); }))
+        << threads << " threads";
+  }
+}
+
+TEST(NoAllocation, CApiDetectRun) {
+  namespace det = nn::detection;
+  const auto v = det::FasterRcnnVariant::MobileNetV3Large320Fpn;
+  const auto bytes = nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 5).bytes();
+  for (int threads : {1, 2}) {
+    ApiModel m;
+    roadnn_model_params mp = roadnn_model_default_params(ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_320_FPN);
+    mp.box_score_thresh = 0.0f;
+    ASSERT_EQ(ROADNN_OK, roadnn_model_load_memory(bytes.data(), bytes.size(), &mp, &m.model)) << roadnn_last_error();
+    roadnn_session_params sp = roadnn_session_default_params();
+    sp.threads = threads;
+    sp.height = 120, sp.width = 200;
+    ASSERT_EQ(ROADNN_OK, roadnn_session_create(m.model, &sp, &m.session)) << roadnn_last_error();
+    std::vector<std::uint8_t> rgb(120 * 200 * 3);
+    for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>((i * 7919) % 251);
+    const roadnn_image image{rgb.data(), 200, 120, 0};
+    roadnn_detections d;
+    ASSERT_EQ(ROADNN_OK, roadnn_detect(m.session, &image, &d)) << roadnn_last_error();
+    ASSERT_GT(d.count, 0u) << "the test needs detections";
+    EXPECT_EQ(0, allocations_during([&] { roadnn_detect(m.session, &image, &d); })) << threads << " threads";
+  }
 }
 
 }  // namespace

@@ -120,10 +120,8 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
   rp.sampling_ratio = 2;
   rp.isa = fc6_.isa();
   Profiler::Scope t_pool(prof_, row_pool_);
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads())
-#endif
-  for (int i = 0; i < r; ++i) {
+  parallel_for(r, true, [&](long long i_) {
+    const int i = static_cast<int>(i_);
     // LevelMapper in float32: floor(4 + log2(sqrt(area) / 224) + 1e-6), clamped.
     const Box& b = proposals[i];
     const float s = std::sqrt((b.x2 - b.x1) * (b.y2 - b.y1));
@@ -134,7 +132,7 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
     RoiAlignParams p = rp;
     p.spatial_scale = scales_[level];
     roi_align_one(pooled[level], 0, b, p, features_.data() + i * per_roi);
-  }
+  });
   t_pool.stop();
   // y = act(x W^T + b) over the r RoIs, timed into profiler row `row`.
   auto linear = [&](int row, const float* x, int lda, const GemmWeights& w, const AlignedBuffer& b, Act act, float* y) {

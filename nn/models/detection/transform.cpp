@@ -41,26 +41,22 @@ void transform_image(const float* image, const ImageSizes& s, const TransformCon
   // written straight into NHWC for the resize kernel; rows split over the team (each
   // element is one subtraction and one division, so the split changes no bit).
   const long long rows = s.orig_h;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads()) if (!omp_in_parallel() && plane > 65536)
-#endif
-  for (long long y = 0; y < rows; ++y) {
+  parallel_for(rows, plane > 65536, [&](long long y_) {
+    const long long y = static_cast<long long>(y_);
     const std::size_t i1 = static_cast<std::size_t>(y + 1) * s.orig_w;
     for (std::size_t i = static_cast<std::size_t>(y) * s.orig_w; i < i1; ++i)
       for (int c = 0; c < 3; ++c) normalised[i * 3 + c] = (image[c * plane + i] - cfg.mean[c]) / cfg.std[c];
-  }
+  });
   resize_bilinear(ConstTensorView(normalised, {1, s.orig_h, s.orig_w, 3}),
                   TensorView{resized, {1, s.resized_h, s.resized_w, 3}});
   const std::size_t row = static_cast<std::size_t>(s.resized_w) * 3;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for schedule(static) num_threads(nn::num_threads()) if (!omp_in_parallel() && out.count() > 65536)
-#endif
-  for (int y = 0; y < out.shape.h; ++y) {
+  parallel_for(out.shape.h, out.count() > 65536, [&](long long y_) {
+    const int y = static_cast<int>(y_);
     float* dst = out.pixel(0, y, 0);
     const std::size_t copied = y < s.resized_h ? row : 0;
     if (copied) std::memcpy(dst, resized + y * row, sizeof(float) * copied);
     std::fill(dst + copied, dst + static_cast<std::size_t>(out.shape.w) * 3, 0.0f);  // padding = 0 after normalising
-  }
+  });
 }
 
 }  // namespace nn::detection
