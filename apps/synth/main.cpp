@@ -98,7 +98,7 @@ std::vector<std::int64_t> parse_shape(const std::string& text) {
 
 int main(int argc, char** argv) {
   apps::apply_exec_environment("synth");
-  std::string model, shape_text, out, range = "normal", head = "v4", image_size;
+  std::string model, shape_text, out, range = "normal", head = "v4", image_size, input_size;
   int seed = 1, classes = 2;
   cli::Parser args("synth", "(--model NAME | --shape N,C,H,W) --out FILE.safetensors [--seed S] [--range normal|LO,HI]",
                    "Writes seeded random weights for a model (PyTorch state_dict names), a random input\n"
@@ -109,6 +109,8 @@ int main(int argc, char** argv) {
               "fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn or fasterrcnn_resnet50_fpn",
               &model);
   args.option("head", "V", "stixelnext head variant v0..v4 (default v4)", &head);
+  args.option("input-size", "HxW", "stixelnext: the network input size written to the metadata "
+              "(stixelnext.input_height/_width; default: none, i.e. 1280x1920)", &input_size);
   args.option("classes", "N", "Faster R-CNN classes, background included (default 2: one device class)",
               &classes);
   args.option("image", "WxH", "a synthetic road-scene PNG of this size instead", &image_size);
@@ -129,6 +131,13 @@ int main(int argc, char** argv) {
   if (!nn::parse_stixel_head(head, &variant)) args.fail("--head must be one of v0..v4");
   nn::detection::FasterRcnnVariant detector;
   const bool is_detector = nn::detection::parse_faster_rcnn(model, &detector);
+  int in_h = 0, in_w = 0;
+  if (!input_size.empty()) {
+    if (model != "stixelnext") args.fail("--input-size applies to --model stixelnext only");
+    if (std::sscanf(input_size.c_str(), "%dx%d", &in_h, &in_w) != 2 || in_h < 32 || in_w < 32 || in_h > 16384 ||
+        in_w > 16384)
+      args.fail("--input-size takes HxW with both in [32, 16384], e.g. 320x480");
+  }
   if (args.given("classes") && !is_detector) args.fail("--classes applies to the fasterrcnn_* models only");
   if (classes < 1 || classes > 10000) args.fail("--classes must be in 1..10000 (background included)");
 
@@ -152,6 +161,10 @@ int main(int argc, char** argv) {
         w.set_metadata("stixelnext.head", head);
         w.set_metadata("stixelnext.anchors", "tangent:4,66,64");
         w.set_metadata("stixelnext.normalization", "raw255");
+        if (in_h > 0) {
+          w.set_metadata("stixelnext.input_height", std::to_string(in_h));
+          w.set_metadata("stixelnext.input_width", std::to_string(in_w));
+        }
       }
       if (is_detector) w.set_metadata("classes", std::to_string(classes));
     } else {

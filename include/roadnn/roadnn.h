@@ -236,6 +236,7 @@ typedef struct roadnn_box {
 
 typedef struct roadnn_shle_params {
   /* stereo calibration */
+  int width, height;      /* frame size in pixels: every pushed frame has it (required) */
   double fx, fy, cx, cy;  /* left camera, pixels */
   double bf;              /* baseline x focal length, metre-pixels */
   double mount_height;    /* camera height above the road, metres (default 1.45) */
@@ -251,7 +252,7 @@ typedef struct roadnn_shle_params {
   const char* tracker;    /* "ncc" (default), "mil" or "none": fills frames without a box */
   int max_track_frames;   /* frames tracked after the last box (default 30, 0: no limit) */
   /* temporal */
-  int use_kalman;         /* 1 (default) */
+  int use_kalman;         /* 1 (default); the released code's off-by-one mode cannot stream */
   double kalman_q, kalman_r, kalman_p0; /* 1e-3, 1e-2, 6.0 */
 } roadnn_shle_params;
 
