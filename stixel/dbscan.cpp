@@ -49,8 +49,7 @@ struct Cell {
   bool cores_connected = true;       // every core of the cell is in one component
 };
 
-// Buffers reused across calls on one thread, so clustering a frame after the
-// first one allocates nothing.
+// The per-call buffers of one clustering run.
 struct Workspace {
   std::vector<std::int64_t> ca, cb;
   std::vector<int> table, order, cell_of, core_order, parent, label_of_root;
@@ -217,7 +216,7 @@ std::vector<int> dbscan(const std::vector<Point2>& pts, double eps, int min_samp
   if (n == 0) return {};
 
   const double eps2 = eps * eps;
-  static thread_local Workspace ws;
+  Workspace ws;
   Grid grid(pts, eps / std::sqrt(2.0) * (1.0 - 1e-9), ws);
   std::vector<Cell>& cells = ws.cells;
   const std::vector<int>& order = ws.order;

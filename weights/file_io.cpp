@@ -1,7 +1,9 @@
 #include "weights/file_io.h"
 
 #include <algorithm>
-#include <atomic>
+#include <chrono>
+#include <functional>
+#include <thread>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -28,14 +30,17 @@ struct FileCloser {
   }
 };
 
-// A name no other writer in this or another process picks: pid plus a counter.
+// A name no other writer picks: pid, thread, the clock and the attempt number (the
+// file is created exclusively, so a clash only costs another attempt). No counter:
+// the library keeps no mutable global state.
 std::string temporary_name(const std::string& path, unsigned attempt) {
-  static std::atomic<unsigned> counter{0};
   std::string name = path + ".tmp";
 #ifdef __unix__
   name += "-" + std::to_string(static_cast<long long>(::getpid()));
 #endif
-  name += "-" + std::to_string(counter.fetch_add(1)) + "-" + std::to_string(attempt);
+  const auto tid = std::hash<std::thread::id>()(std::this_thread::get_id());
+  const auto ticks = std::chrono::steady_clock::now().time_since_epoch().count();
+  name += "-" + std::to_string(tid % 1000000) + "-" + std::to_string(ticks % 1000000000) + "-" + std::to_string(attempt);
   return name;
 }
 
