@@ -1,5 +1,7 @@
 #include "shle/boxes_csv.h"
 
+#include "weights/quote_name.h"
+
 #include <cmath>
 #include <cstdlib>
 
@@ -58,17 +60,17 @@ BoxesFile parse_boxes_csv(std::string_view text, const std::string& source) {
       continue;
     }
     std::string_view fr = fields[0];
-    if (fr.empty() || fr.size() > 9) throw Error(where + "frame '" + std::string(fr) + "' is not a frame index");
+    if (fr.empty() || fr.size() > 9) throw Error(where + "frame " + weights::quote_name(std::string(fr)) + " is not a frame index");
     int frame = 0;
     for (char c : fr) {
-      if (c < '0' || c > '9') throw Error(where + "frame '" + std::string(fr) + "' is not a frame index");
+      if (c < '0' || c > '9') throw Error(where + "frame " + weights::quote_name(std::string(fr)) + " is not a frame index");
       frame = frame * 10 + (c - '0');
     }
     double v[5];
     static const char* names[5] = {"x0", "y0", "x1", "y1", "score"};
     for (int i = 0; i < 5; ++i)
       if (!parse_number(fields[i + 1], &v[i]))
-        throw Error(where + names[i] + " '" + std::string(fields[i + 1]) + "' is not a finite number");
+        throw Error(where + names[i] + " " + weights::quote_name(std::string(fields[i + 1])) + " is not a finite number");
     if (v[2] < v[0] || v[3] < v[1]) throw Error(where + "box has x1 < x0 or y1 < y0");
     f.frames[frame].push_back(Candidate{Box{v[0], v[1], v[2], v[3]}, v[4]});
     ++f.count;

@@ -1,5 +1,7 @@
 #include "shle/calibration.h"
 
+#include "weights/quote_name.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -67,7 +69,7 @@ Calibration parse_calibration(const json::Value& root, const std::string& source
                                               "height", "rotation", "translation"};
   for (const auto& m : root.object())
     if (!known.count(m.first))
-      throw Error(source + ": unknown key '" + m.first + "' (known: fx, fy, cx, cy, bf, baseline, "
+      throw Error(source + ": unknown key " + weights::quote_name(m.first) + " (known: fx, fy, cx, cy, bf, baseline, "
                   "mount_height, disparity_scale, width, height, rotation, translation)");
   Calibration c;
   c.intrinsics.fx = positive(root, "fx", source);

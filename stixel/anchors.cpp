@@ -1,5 +1,7 @@
 #include "stixel/anchors.h"
 
+#include "weights/quote_name.h"
+
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -84,7 +86,7 @@ Anchors parse_anchor_spec(const std::string& spec, const std::string& source) {
     args = spec.substr(colon + 1);
   }
   if (kind != "tangent" && kind != "linear")
-    throw Error(where + ": unknown anchor kind '" + kind + "' (expected tangent or linear)");
+    throw Error(where + ": unknown anchor kind " + weights::quote_name(kind) + " (expected tangent or linear)");
   if (args.empty()) {
     if (kind == "linear")
       throw Error(where + ": linear anchors need START,END,N (e.g. linear:5,69,64)");
@@ -96,7 +98,7 @@ Anchors parse_anchor_spec(const std::string& spec, const std::string& source) {
     char* endp = nullptr;
     v[k] = std::strtod(p, &endp);
     if (endp == p || (k < 2 && *endp != ',') || (k == 2 && *endp != '\0'))
-      throw Error(where + ": malformed anchor spec '" + spec + "' (expected " + kind +
+      throw Error(where + ": malformed anchor spec " + weights::quote_name(spec) + " (expected " + kind +
                   ":START,END,N)");
     p = endp + 1;
   }

@@ -1,5 +1,7 @@
 #include "stixel/predictor.h"
 
+#include "weights/quote_name.h"
+
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -19,7 +21,7 @@ int metadata_int(const std::map<std::string, std::string>& md, const std::string
   char* end = nullptr;
   const long v = std::strtol(it->second.c_str(), &end, 10);
   if (it->second.empty() || *end || v < lo || v > hi)
-    throw Error(source + ": metadata " + key + "='" + it->second + "' is not an integer in [" + std::to_string(lo) +
+    throw Error(source + ": metadata " + key + "=" + weights::quote_name(it->second) + " is not an integer in [" + std::to_string(lo) +
                 ", " + std::to_string(hi) + "]");
   return static_cast<int>(v);
 }
@@ -53,11 +55,11 @@ ModelSettings settings_from_metadata(const std::map<std::string, std::string>& m
   if (auto it = md.find("stixelnext.anchors"); it != md.end())
     s.anchors = parse_anchor_spec(it->second, source + ": metadata stixelnext.anchors");
   if (auto it = md.find("stixelnext.normalization"); it != md.end() && !parse_normalization(it->second, &s.normalization))
-    throw Error(source + ": metadata stixelnext.normalization='" + it->second + "' is not raw255, unit or imagenet");
+    throw Error(source + ": metadata stixelnext.normalization=" + weights::quote_name(it->second) + " is not raw255, unit or imagenet");
   if (auto it = md.find("stixelnext.head"); it != md.end()) {
     nn::StixelHeadVariant v;
     if (!nn::parse_stixel_head(it->second, &v))
-      throw Error(source + ": metadata stixelnext.head='" + it->second + "' is not one of v0..v4");
+      throw Error(source + ": metadata stixelnext.head=" + weights::quote_name(it->second) + " is not one of v0..v4");
     s.head = v;
   }
   return s;

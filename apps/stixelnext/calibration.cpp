@@ -1,5 +1,7 @@
 #include "apps/stixelnext/calibration.h"
 
+#include "weights/quote_name.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -46,7 +48,7 @@ Calibration read_calibration(const std::string& path) {
   for (const auto& [key, value] : doc.object()) {
     (void)value;
     if (key != "K" && key != "T" && key != "width" && key != "height")
-      throw std::runtime_error(path + ": unknown key \"" + key + "\" (expected K, T, width, height)");
+      throw std::runtime_error(path + ": unknown key " + weights::quote_name(key) + " (expected K, T, width, height)");
   }
   Calibration c;
   if (!doc.get("K")) throw std::runtime_error(path + ": missing \"K\" (9 numbers, row-major)");

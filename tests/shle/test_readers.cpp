@@ -10,6 +10,7 @@
 #include "shle/disparity_io.h"
 #include "shle/error.h"
 #include "shle/labelme.h"
+#include "tests/error_of.h"
 #include "tests/shle/test_util.h"
 #include "weights/json.h"
 
@@ -377,3 +378,19 @@ TEST(Dataset, BadFolders) {
 }
 
 }  // namespace
+
+// Issue 12, finding 5: input bytes quoted in errors are escaped and cut.
+TEST(HostileMessages, CalibrationKeyAndBoxesFieldsStayOnePrintableLine) {
+  const std::string h = testutil::hostile_text();
+  // A JSON key with escaped control characters decodes to the raw bytes.
+  const std::string calib = "{\"fx\": 2, \"fy\": 1, \"cx\": 0, \"cy\": 0, \"bf\": 1, \"a"
+                            "\\n\\r\\u001b[31m\\u007f" + std::string(5000, 'z') + "\": 3}";
+  const std::string m1 =
+      testutil::error_of([&] { shle::parse_calibration(json::parse(calib, "c.json"), "c.json"); });
+  EXPECT_NE(m1.find("unknown key 'a\\x0a\\x0d\\x1b[31m\\x7fzz"), std::string::npos) << m1;
+  EXPECT_TRUE(testutil::is_one_printable_line(m1, 400)) << m1.size();
+  for (const std::string& row : {h + ",1,2,3,4,0.5\n", "1," + h + ",2,3,4,0.5\n", "1,1,2,3,4," + h + "\n"}) {
+    const std::string m = testutil::error_of([&] { shle::parse_boxes_csv(row, "b.csv"); });
+    EXPECT_TRUE(testutil::is_one_printable_line(m, 400)) << m.size() << ": " << m.substr(0, 200);
+  }
+}

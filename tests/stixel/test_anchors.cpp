@@ -4,6 +4,8 @@
 
 #include "stixel/anchors.h"
 #include "stixel/error.h"
+#include "stixel/predictor.h"
+#include "tests/error_of.h"
 
 namespace {
 
@@ -64,5 +66,22 @@ TEST(Anchors, BadSpecsAreErrors) {
     } catch (const stixel::Error& e) {
       EXPECT_EQ(std::string(e.what()).rfind("weights.safetensors: ", 0), 0u) << e.what();
     }
+  }
+}
+
+// Issue 12, finding 5: an anchor spec or a metadata value from a model file is quoted
+// escaped and cut in the error.
+TEST(HostileMessages, AnchorSpecAndMetadataStayOnePrintableLine) {
+  const std::string h = testutil::hostile_text();
+  for (const std::string& spec : {h, "tangent:" + h, "linear:1,2," + h}) {
+    const std::string m = testutil::error_of([&] { stixel::parse_anchor_spec(spec, "w.safetensors"); });
+    EXPECT_TRUE(testutil::is_one_printable_line(m, 400)) << m.size() << ": " << m.substr(0, 200);
+  }
+  for (const char* key : {"stixelnext.input_height", "stixelnext.normalization", "stixelnext.head",
+                          "stixelnext.anchors"}) {
+    const std::map<std::string, std::string> md{{key, h}};
+    const std::string m = testutil::error_of([&] { stixel::settings_from_metadata(md, "w.safetensors"); });
+    EXPECT_NE(m.find("w.safetensors"), std::string::npos) << key;
+    EXPECT_TRUE(testutil::is_one_printable_line(m, 400)) << key << ": " << m.substr(0, 200);
   }
 }

@@ -269,3 +269,15 @@ TEST(Writer, OutputIsDeterministic) {
 }
 
 }  // namespace
+
+// Issue 12, finding 4: an empty tensor whose other dimensions multiply past int64
+// (valid: zero elements) must not overflow in numel().
+TEST(SafeTensors, NumelOfAnEmptyTensorWithHugeDimensionsIsZero) {
+  weights::TensorInfo t;
+  t.shape = {std::int64_t{1} << 32, std::int64_t{1} << 32, 0};
+  EXPECT_EQ(0, t.numel());
+  t.shape = {0, std::int64_t{1} << 40, std::int64_t{1} << 40};
+  EXPECT_EQ(0, t.numel());
+  t.shape = {3, 4};
+  EXPECT_EQ(12, t.numel());
+}
