@@ -23,7 +23,7 @@ endfunction()
 # Links OpenMP when enabled; the runtime code tests ROADNN_OPENMP rather than _OPENMP
 # so that a build without it is explicit.
 function(roadnn_link_openmp target)
-  if(WITH_OPENMP)
+  if(ROADNN_WITH_OPENMP)
     target_link_libraries(${target} PUBLIC OpenMP::OpenMP_CXX)
     target_compile_definitions(${target} PUBLIC ROADNN_OPENMP=1)
   endif()
