@@ -1,9 +1,12 @@
 // roadnn_model_*: loading (file or memory, the same validation), parameters, info.
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <set>
+#include <system_error>
 
 #include "api/handles.h"
 #include "api/status.h"
@@ -100,7 +103,14 @@ stixel::ModelSettings stixel_settings_of(const roadnn_model_params& p, const wei
       fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.columns must be in [1, 16384]");
     s.columns = p.columns;
   }
-  if (p.anchors) s.anchors = stixel::parse_anchor_spec(p.anchors, "roadnn_model_params.anchors");
+  if (p.anchors) {
+    // A malformed spec is the caller's argument, not the weights' fault.
+    try {
+      s.anchors = stixel::parse_anchor_spec(p.anchors, "roadnn_model_params.anchors");
+    } catch (const std::exception& e) {
+      fail(ROADNN_ERROR_INVALID_ARGUMENT, e.what());
+    }
+  }
   if (p.normalization && !stixel::parse_normalization(p.normalization, &s.normalization))
     fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.normalization must be raw255, unit or imagenet");
   if (s.effective_columns() < 1)
@@ -156,6 +166,7 @@ std::unique_ptr<roadnn_model> load(const weights::SafeTensors& st, const roadnn_
     m->weight_bytes = model->backbone().weight_bytes() + model->head().weight_bytes();
     m->stixelnext = std::move(model);
   } else {
+    precision_of(p);  // rejects bf16 (and values that are no roadnn_precision) for detectors
     const auto v = variant_of(p.kind);
     nn::detection::FasterRcnnConfig cfg = nn::detection::faster_rcnn_defaults(v);
     if (p.box_score_thresh >= 0) cfg.roi_heads.score_thresh = p.box_score_thresh;
@@ -208,6 +219,14 @@ roadnn_status roadnn_model_load_file(const char* path, const roadnn_model_params
     struct stat sb;
     if (stat(path, &sb) != 0) fail(ROADNN_ERROR_IO, std::string(path) + ": cannot open (no such file or no access)");
     if (!S_ISREG(sb.st_mode)) fail(ROADNN_ERROR_IO, std::string(path) + ": not a regular file");
+    // A file that exists but cannot be opened (permissions) is an I/O error too, not
+    // a malformed model (which weights::SafeTensors::load would report it as).
+    if (std::FILE* f = std::fopen(path, "rb")) {
+      std::fclose(f);
+    } else {
+      fail(ROADNN_ERROR_IO, std::string(path) + ": cannot open for reading (" +
+                                std::generic_category().message(errno) + ")");
+    }
     return weights::SafeTensors::load(path);
   });
 }
