@@ -54,8 +54,8 @@ typedef enum roadnn_status {
 ROADNN_API const char* roadnn_version(void);
 /* "ok", "invalid argument", ... */
 ROADNN_API const char* roadnn_status_name(roadnn_status status);
-/* The message of the calling thread's last failing call ("" if none). Valid until that
- * thread's next call into roadnn. */
+/* The calling thread's message for its most recent call into roadnn: one line saying
+ * what failed, or "" when that call succeeded. Valid until the thread's next call. */
 ROADNN_API const char* roadnn_last_error(void);
 
 /* ---- models ------------------------------------------------------------------- */
@@ -146,7 +146,8 @@ typedef struct roadnn_session_params {
 typedef struct roadnn_session roadnn_session;
 
 ROADNN_API roadnn_session_params roadnn_session_default_params(void);
-/* The session keeps a reference to the model; the model must outlive it. */
+/* The session keeps a reference to the model; the model must outlive it. *out is NULL
+ * on failure. */
 ROADNN_API roadnn_status roadnn_session_create(const roadnn_model* model, const roadnn_session_params* params,
                                                roadnn_session** out);
 ROADNN_API void roadnn_session_free(roadnn_session* session);

@@ -160,7 +160,8 @@ TEST(ApiMisuse, LoadFileThatCannotBeRead) {
 // A file without read permission. Root reads it anyway, so this runs only as
 // another user (e.g. `runuser -u nobody -- api_tests`).
 TEST(ApiMisuse, LoadFileWithoutReadPermission) {
-  if (::geteuid() == 0) GTEST_SKIP() << "root can read files without read permission";
+  // Root reads any file: then the load runs in a child that gives up root first (as
+  // the unprivileged user "nobody"), so the test runs on CI too.
   const std::string path = temp_path("unreadable.safetensors");
   {
     std::ofstream f(path, std::ios::binary);
@@ -169,7 +170,25 @@ TEST(ApiMisuse, LoadFileWithoutReadPermission) {
   }
   ASSERT_EQ(::chmod(path.c_str(), 0), 0);
   const roadnn_model_params p = params(ROADNN_MODEL_CONVNEXT);
-  EXPECT_LOAD_FILE_ERROR(path.c_str(), &p, ROADNN_ERROR_IO, "cannot open for reading");
+  if (::geteuid() != 0) {
+    EXPECT_LOAD_FILE_ERROR(path.c_str(), &p, ROADNN_ERROR_IO, "cannot open for reading");
+  } else {
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
+      roadnn_model* m = nullptr;
+      const roadnn_status st = roadnn_model_load_file(path.c_str(), &p, &m);
+      const bool ok = st == ROADNN_ERROR_IO && m == nullptr &&
+                      std::string(roadnn_last_error()).find("cannot open for reading") != std::string::npos;
+      ::_exit(ok ? 0 : 4);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_NE(3, WEXITSTATUS(status)) << "could not become the user nobody";
+    EXPECT_EQ(0, WEXITSTATUS(status)) << "an unreadable file did not give ROADNN_ERROR_IO 'cannot open for reading'";
+  }
   std::remove(path.c_str());
 }
 
