@@ -13,6 +13,7 @@
 #include "nn/gemm_bf16.h"
 #include "nn/winograd.h"
 #include "stixel/anchors.h"
+#include "weights/tensor_spec.h"
 
 namespace roadnn_api {
 
@@ -120,16 +121,8 @@ stixel::ModelSettings stixel_settings_of(const roadnn_model_params& p, const wei
 }
 
 void warn_unused(roadnn_model* m, const weights::SafeTensors& st, const std::vector<std::string>& used) {
-  const std::set<std::string> known(used.begin(), used.end());
-  std::vector<std::string> unused;
-  for (const auto& n : st.names())
-    if (!known.count(n)) unused.push_back(n);
-  if (unused.empty()) return;
-  std::string list;
-  for (std::size_t i = 0; i < unused.size() && i < 8; ++i) list += (i ? ", " : "") + unused[i];
-  if (unused.size() > 8) list += ", ...";
-  m->warnings.push_back(st.source() + ": " + std::to_string(unused.size()) + " tensors not used by " +
-                        kind_name(m->kind) + ": " + list);
+  const std::string w = weights::unused_tensors_warning(st, used, kind_name(m->kind));
+  if (!w.empty()) m->warnings.push_back(w);
 }
 
 std::size_t tensor_bytes(const weights::SafeTensors& st, const std::vector<weights::TensorSpec>& specs) {

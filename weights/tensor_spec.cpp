@@ -1,6 +1,7 @@
 #include "weights/tensor_spec.h"
 
 #include <cstring>
+#include <set>
 #include <unordered_set>
 
 #include "weights/quote_name.h"
@@ -60,6 +61,19 @@ std::vector<std::string> check_tensors(const SafeTensors& st, const std::vector<
     if (!expected.count(t.name)) unused.push_back(t.name);
   }
   return unused;
+}
+
+std::string unused_tensors_warning(const SafeTensors& st, const std::vector<std::string>& used,
+                                   const std::string& what) {
+  const std::set<std::string> known(used.begin(), used.end());
+  std::vector<std::string> unused;
+  for (const auto& n : st.names())
+    if (!known.count(n)) unused.push_back(n);
+  if (unused.empty()) return "";
+  std::string list;
+  for (std::size_t i = 0; i < unused.size() && i < 8; ++i) list += (i ? ", " : "") + quote_name(unused[i]);
+  if (unused.size() > 8) list += ", ...";
+  return st.source() + ": " + std::to_string(unused.size()) + " tensors not used by " + what + ": " + list;
 }
 
 }  // namespace weights

@@ -25,4 +25,10 @@ struct TensorSpec {
 // caller can warn about them (padding tensors are not listed).
 std::vector<std::string> check_tensors(const SafeTensors& st, const std::vector<TensorSpec>& specs);
 
+// Tensors the file holds that `used` does not name, described in one line
+// ("FILE: N tensors not used by WHAT: a, b, ..." with at most 8 names, each quoted as
+// in errors), or "" when every tensor is used. Reported, never silently dropped.
+std::string unused_tensors_warning(const SafeTensors& st, const std::vector<std::string>& used,
+                                   const std::string& what);
+
 }  // namespace weights

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <gtest/gtest.h>
+
+#include "tests/strided_image.h"
 #include <unistd.h>
 
 #include <cstdint>
@@ -157,15 +159,7 @@ inline std::vector<std::uint8_t> pixels(int w, int h, unsigned seed) {
   return px;
 }
 
-// The same pixels with `pad` bytes of garbage after every row.
-inline std::vector<std::uint8_t> with_padding(const std::vector<std::uint8_t>& px, int w, int h, std::size_t pad) {
-  const std::size_t row = static_cast<std::size_t>(w) * 3, stride = row + pad;
-  std::vector<std::uint8_t> out(stride * h);
-  nn::SplitMix64 rng(11);
-  for (auto& b : out) b = static_cast<std::uint8_t>(rng.next());
-  for (int r = 0; r < h; ++r) std::memcpy(out.data() + r * stride, px.data() + r * row, row);
-  return out;
-}
+using testutil::with_padding;
 
 inline roadnn_image image_of(const std::vector<std::uint8_t>& px, int w, int h, std::size_t stride = 0) {
   roadnn_image im;
