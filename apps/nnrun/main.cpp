@@ -108,6 +108,8 @@ int main(int argc, char** argv) {
     if (model == m.name) info = &m;
   if (!info) args.fail("unknown model '" + model + "'");
   if (repeat < 0) args.fail("--repeat must be >= 0");
+  for (const std::string* p : {&weights_path, &input_path, &output_path})
+    if (p->empty()) args.fail("--weights, --input and --output must not be empty");
   if (threads < 0) args.fail("--threads must be >= 0");
   if (!isa_name.empty()) {
     nn::Isa isa;

@@ -1,6 +1,7 @@
 // shle_eval: the tables of docs/SHLE.md on a benchmark written by
 // `shle_synth --benchmark DIR`: per-scene HE/HER, the Table III ablation, and
 // box sources / box rules / trackers on the simulated detector's boxes.
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "apps/common/cli.h"
+#include "weights/quote_name.h"
 #include "apps/common/exec_env.h"
 #include "apps/shle/frame_loader.h"
 #include "shle/box_source.h"
@@ -37,7 +39,12 @@ std::vector<BenchScene> read_listing(const std::string& root) {
     std::string h;
     if (!std::getline(ss, s.name, ',') || !std::getline(ss, s.device, ',') || !std::getline(ss, h, ','))
       throw shle::Error(root + "/benchmark.csv: line " + std::to_string(line_no) + ": expected scene,device,height");
-    s.height = std::stod(h);
+    // A finite positive number, all of the field (std::stod would say only "stod").
+    char* end = nullptr;
+    s.height = std::strtod(h.c_str(), &end);
+    if (h.empty() || *end != '\0' || !std::isfinite(s.height) || !(s.height > 0))
+      throw shle::Error(root + "/benchmark.csv: line " + std::to_string(line_no) + ": height " +
+                        weights::quote_name(h) + " is not a positive finite number of metres");
     s.dir = root + "/" + s.name;
     out.push_back(s);
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <cerrno>
@@ -168,8 +169,13 @@ int main(int argc, char** argv) {
       calib = stixelnext::read_calibration(calib_path);
       stixel::Projection check(calib.K, calib.T, calib_path);  // a singular K4 * T fails here, once
     }
-    if (mkdir(out_dir.c_str(), 0777) != 0 && errno != EEXIST)
-      throw std::runtime_error(out_dir + ": cannot create the output folder");
+    {
+      std::error_code ec;  // every missing level, as mkdir -p
+      std::filesystem::create_directories(out_dir, ec);
+      if (ec || !std::filesystem::is_directory(out_dir))
+        throw std::runtime_error(out_dir + ": cannot create the output folder (" +
+                                 (ec ? ec.message() : std::string("not a folder")) + ")");
+    }
     const auto& st = predictor->settings();
     if (!quiet)
       std::fprintf(stderr, "stixelnext: head %s, input %dx%d, %d columns of %d px, anchors %s, %s input, kernels %s (%s), %d threads\n",

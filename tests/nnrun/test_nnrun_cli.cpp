@@ -397,3 +397,17 @@ TEST_F(NnrunCli, Conv3x3DirectIsTheLibrarysDirectModel) {
 }
 
 }  // namespace
+
+// Issue 12, finding 11: an empty path is a usage error naming the options, not
+// "nnrun: : cannot rename ...".
+TEST_F(NnrunCli, EmptyOutputPathIsAUsageError) {
+  const std::string cmd = std::string(NNRUN_PATH) + " --model convnext --weights " + path("w.safetensors") +
+                          " --input " + path("x.safetensors") + " --output '' >" + path("stdout") + " 2>" +
+                          path("stderr");
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::stringstream e;
+  e << std::ifstream(path("stderr")).rdbuf();
+  EXPECT_NE(e.str().find("must not be empty"), std::string::npos) << e.str();
+}

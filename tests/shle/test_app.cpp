@@ -287,3 +287,18 @@ TEST(ShleApp, DetectorErrors) {
 }
 
 }  // namespace
+
+// Issue 12, finding 11: a bad height in benchmark.csv names the file, the line and the
+// value (it was "shle_eval: stod").
+TEST(ShleApp, EvalBadHeightNamesFileLineAndValue) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "bench");
+  for (const std::string h : {"tall", "1e999", "-2", "3.3x", "nan"}) {
+    std::ofstream(dir / "bench/benchmark.csv") << "scene,device,height\ns1,bar," << h << "\n";
+    Result r = run(std::string(SHLE_EVAL_APP) + " --benchmark '" + (dir / "bench") + "'", dir);
+    EXPECT_EQ(r.code, 1) << h << ": " << r.err;
+    EXPECT_NE(r.err.find("benchmark.csv: line 2: height '" + h + "' is not a positive finite number"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}

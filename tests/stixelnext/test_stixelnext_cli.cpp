@@ -167,3 +167,15 @@ TEST_F(StixelnextCli, ClusterNeedsCalibration) {
 }
 
 }  // namespace
+
+// Issue 12, finding 11: --out-dir creates every missing level, and a folder that cannot
+// be made says why, in one line.
+TEST_F(StixelnextCli, OutDirCreatesAllLevelsOrSaysWhy) {
+  ASSERT_EQ(run("--weights " + path("w.safetensors") + " --out-dir " + path("a/b/c") + " " + path("img.png")), 0)
+      << err_;
+  EXPECT_TRUE(exists("a/b/c/img.stx1"));
+  write_text("plain_file", "x");
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --out-dir " + path("plain_file/sub") + " " + path("img.png")),
+            1);
+  expect_error_line("plain_file/sub: cannot create the output folder (");
+}
