@@ -1,5 +1,4 @@
 // roadnn_model_*: loading (file or memory, the same validation), parameters, info.
-#include <sys/stat.h>
 
 #include <cerrno>
 #include <cmath>
@@ -13,6 +12,7 @@
 #include "nn/gemm_bf16.h"
 #include "nn/winograd.h"
 #include "stixel/anchors.h"
+#include "weights/file_io.h"
 #include "weights/tensor_spec.h"
 
 namespace roadnn_api {
@@ -209,17 +209,19 @@ roadnn_model_params roadnn_model_default_params(roadnn_model_kind kind) {
 roadnn_status roadnn_model_load_file(const char* path, const roadnn_model_params* params, roadnn_model** out) {
   return load_guarded("roadnn_model_load_file", out, params, [&] {
     require(path, "roadnn_model_load_file", "path");
-    struct stat sb;
-    if (stat(path, &sb) != 0) fail(ROADNN_ERROR_IO, std::string(path) + ": cannot open (no such file or no access)");
-    if (!S_ISREG(sb.st_mode)) fail(ROADNN_ERROR_IO, std::string(path) + ": not a regular file");
-    // A file that exists but cannot be opened (permissions) is an I/O error too, not
-    // a malformed model (which weights::SafeTensors::load would report it as).
-    if (std::FILE* f = std::fopen(path, "rb")) {
-      std::fclose(f);
-    } else {
-      fail(ROADNN_ERROR_IO, std::string(path) + ": cannot open for reading (" +
-                                std::generic_category().message(errno) + ")");
+    // Opening first (without blocking, regular files only) tells an I/O problem
+    // (missing, unreadable, a FIFO or device) from a malformed model, which
+    // weights::SafeTensors::load would report every failure as.
+    std::uint64_t size = 0;
+    std::string problem;
+    std::FILE* f = weights::open_regular_file(path, &size, &problem);
+    if (!f) {
+      // "cannot open (Permission denied)": the file exists but is unreadable.
+      if (problem.rfind("cannot open (", 0) == 0 && problem.find("No such file") == std::string::npos)
+        problem.insert(std::string("cannot open").size(), " for reading");
+      fail(ROADNN_ERROR_IO, std::string(path) + ": " + problem);
     }
+    std::fclose(f);
     return weights::SafeTensors::load(path);
   });
 }

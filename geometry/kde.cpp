@@ -31,7 +31,9 @@ KdeMode gaussian_kde_mode(const double* z, const double* w, std::size_t n, const
   }
   const double h = options.bandwidth, s = options.grid_step;
   const double last_pos = std::floor(z[n - 1] / s);
-  if (last_pos > 4503599627370496.0) throw Error("KDE: grid longer than 2^52 points");
+  if (last_pos > kMaxKdeGridPoints)
+    throw Error("KDE: a grid of " + std::to_string(last_pos) + " points (largest sample " + std::to_string(z[n - 1]) +
+                " / grid step " + std::to_string(s) + ") is above the limit of 2^26 points; use a coarser grid step");
   const std::int64_t last = static_cast<std::int64_t>(last_pos);
   const double two_h2 = 2.0 * h * h;
   // ln(2^60) = 41.59; the +1 absorbs rounding in the window tests below.

@@ -37,8 +37,10 @@ struct KdeMode {
 // Samples sorted ascending (repeats allowed), finite and >= 0, each with a weight
 // > 0 (a count of identical samples). Throws geometry::Error for an empty set,
 // unsorted, negative or non-finite samples, non-positive weights, a bandwidth or
-// grid step that is not a positive finite number, or a grid of more than 2^52
-// points.
+// grid step that is not a positive finite number, or a grid of more than
+// kMaxKdeGridPoints points (largest sample / grid step), which bounds the time.
+constexpr double kMaxKdeGridPoints = 67108864.0;  // 2^26
+
 KdeMode gaussian_kde_mode(const double* sorted_values, const double* weights, std::size_t n,
                           const KdeOptions& options);
 

@@ -80,9 +80,14 @@ Calibration parse_calibration(const json::Value& root, const std::string& source
   if (has_bf == has_baseline)
     throw Error(source + ": give exactly one of 'bf' (metre-pixels) and 'baseline' (metres)");
   c.bf = has_bf ? positive(root, "bf", source) : positive(root, "baseline", source) * c.intrinsics.fx;
+  if (!std::isfinite(c.bf))
+    throw Error(source + ": 'baseline' x 'fx' overflows to infinity (" + std::to_string(c.bf) + ")");
   if (root.get("disparity_scale")) c.disparity_scale = positive(root, "disparity_scale", source);
   if (root.get("width")) c.width = image_size(root, "width", source);
   if (root.get("height")) c.height = image_size(root, "height", source);
+  if (std::uint64_t(c.width) * std::uint64_t(c.height) > kMaxCalibratedPixels)
+    throw Error(source + ": 'width' x 'height' is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                ", above the limit of " + std::to_string(kMaxCalibratedPixels >> 20) + " Mpx");
   const json::Value* rot = root.get("rotation");
   const json::Value* tr = root.get("translation");
   if ((rot == nullptr) != (tr == nullptr))
@@ -154,6 +159,8 @@ Calibration load_smartereye_calibration(const std::string& path) {
   c.intrinsics.cx = (cd[39] + cd[41]) / 2.0 - std::floor(dc[4] + dc[0]);
   if (!(c.intrinsics.fx > 0) || !(c.intrinsics.fy > 0))
     throw Error(calib_path + ": focal lengths data[4] and data[12] must be > 0");
+  if (!std::isfinite(c.intrinsics.cx) || !std::isfinite(c.intrinsics.cy))
+    throw Error(calib_path + ": the principal point (data[39..42] with DepthCalib data[0], data[4]) overflows to infinity");
   return c;
 }
 

@@ -5,6 +5,8 @@
 // code's SmarterEye calibData.json / DepthCalib.json pair.
 #pragma once
 
+#include <cstdint>
+
 #include <string>
 
 #include "geometry/camera.h"
@@ -26,6 +28,10 @@ struct Calibration {
   bool has_extrinsics = false;
   geometry::Extrinsics extrinsics;
 };
+
+// Largest calibrated image (width x height), 256 Mpx: above any camera, and the
+// .dat disparity reader allocates width x height samples from it.
+constexpr std::uint64_t kMaxCalibratedPixels = std::uint64_t(256) << 20;
 
 // Plain format. Required: fx, fy, cx, cy and exactly one of bf / baseline.
 // Optional: mount_height (1.45), disparity_scale (32), width/height (1280x720),

@@ -48,7 +48,7 @@ DisparityMap read_dat(const std::string& path, int width, int height, int fracti
   try {
     bytes = read_file_bytes(path, want);
   } catch (const Error& e) {
-    if (std::string(e.what()).find(": larger than") == std::string::npos) throw;
+    if (std::string(e.what()).find("larger than the limit") == std::string::npos) throw;
     throw Error(path + ": more than " + std::to_string(want) + " bytes, expected " + std::to_string(want) + " (" +
                 std::to_string(width) + "x" + std::to_string(height) + " uint16)");
   }

@@ -9,8 +9,9 @@
 namespace shle {
 
 // The file's bytes. Throws shle::Error "<path>: <problem>" when it cannot be
-// opened or read, is a directory, or is larger than max_bytes ("<path>: larger
-// than N bytes").
+// opened or read, is not a regular file (directories, FIFOs and devices are
+// refused without blocking), or is larger than max_bytes ("<path>: ... larger
+// than the limit of N bytes").
 std::vector<std::uint8_t> read_file_bytes(const std::string& path, std::uint64_t max_bytes);
 
 }  // namespace shle

@@ -43,7 +43,8 @@ void validate(const HeightOptions& o) {
     throw Error("box extension must be a finite number of pixels >= 0");
   if (std::isnan(o.min_height)) throw Error("height prefilter must be a number");
   if (!(o.bandwidth > 0) || !std::isfinite(o.bandwidth)) throw Error("KDE bandwidth must be > 0");
-  if (!(o.grid_step > 0) || !std::isfinite(o.grid_step)) throw Error("KDE grid step must be > 0");
+  if (!(o.grid_step >= kMinGridStep && o.grid_step <= kMaxGridStep))
+    throw Error("KDE grid step must be a number in [0.001, 1000] metres (kMinGridStep, kMaxGridStep)");
   if (!(o.sigma > 0) || !std::isfinite(o.sigma)) throw Error("depth window sigma must be > 0");
   if (o.lowest_n < 1) throw Error("lowest N must be >= 1");
 }
@@ -64,7 +65,10 @@ HeightEstimator::HeightEstimator(const Calibration& calibration, const HeightOpt
   validate(opt_);
   // Scratch for a box as large as the calibrated image, touched now: growing it
   // later would put first-touch page faults (milliseconds) into some frame's time.
-  const std::size_t pixels = static_cast<std::size_t>(std::max(cal_.width, 1)) * std::max(cal_.height, 1);
+  // Capped at kPreallocatedPixels (a box is a fraction of the frame; larger boxes
+  // grow the scratch on demand), so a huge calibrated size commits no memory.
+  const std::size_t pixels = std::min<std::size_t>(
+      static_cast<std::size_t>(std::max(cal_.width, 1)) * std::max(cal_.height, 1), kPreallocatedPixels);
   pts_.resize(pixels + 1);
   lowest_.resize(pixels + 1);
   row_z_.resize(cal_.width);
@@ -220,7 +224,14 @@ HeightResult HeightEstimator::estimate(const DisparityMap& disp, const Box& box)
   r.valid = valid;
   r.points = n;
   if (valid == 0) {
+    // Say why: a map of NaN/Inf (a broken PFM, say) reads differently from one of
+    // zeros (no stereo match). Counted only here, off the per-frame hot path.
+    std::size_t non_finite = 0, total = 0;
+    for (int v = r.v0; v < r.v1; ++v)
+      for (int u = r.u0; u < r.u1; ++u, ++total) non_finite += !std::isfinite(disp.at(u, v));
     r.problem = "no valid disparity in the box";
+    if (non_finite > 0)
+      r.problem += " (" + std::to_string(non_finite) + " of its " + std::to_string(total) + " values are NaN or Inf)";
     return r;
   }
   if (n == 0) {

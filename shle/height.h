@@ -36,6 +36,13 @@ struct HeightOptions {
   int lowest_n = 10;
 };
 
+// Documented limits. The KDE grid step bounds the grid's length (depth / step
+// points, at most 2^26: geometry::kMaxKdeGridPoints); the preallocated scratch
+// covers boxes up to 4 Mpx and grows on demand beyond (a calibrated size commits
+// no memory by itself).
+constexpr double kMinGridStep = 1e-3, kMaxGridStep = 1e3;  // metres
+constexpr std::size_t kPreallocatedPixels = std::size_t(4) << 20;
+
 // Throws shle::Error naming the first option out of range.
 void validate(const HeightOptions& options);
 

@@ -2,6 +2,7 @@
 
 #include "weights/quote_name.h"
 
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -13,6 +14,8 @@ namespace {
 
 constexpr int kMaxAnchors = 1 << 16;
 
+std::string num(double v);
+
 void check_range(double start, double end, int n, const char* what) {
   if (n < 2 || n > kMaxAnchors)
     throw Error(std::string(what) + " anchors: count must be in [2, " + std::to_string(kMaxAnchors) +
@@ -20,6 +23,22 @@ void check_range(double start, double end, int n, const char* what) {
   if (!std::isfinite(start) || !std::isfinite(end) || !(start > 0) || !(end > start))
     throw Error(std::string(what) + " anchors: need 0 < start < end, got start " +
                 std::to_string(start) + ", end " + std::to_string(end));
+  // The depths are float32: a range beyond float (1e-300, 1e300) would give 0 and
+  // Inf depths that fail far from here.
+  if (start < FLT_MIN || end > FLT_MAX)
+    throw Error(std::string(what) + " anchors: start and end must lie in the float range [" + num(FLT_MIN) + ", " +
+                num(FLT_MAX) + "], got start " + num(start) + ", end " + num(end));
+}
+
+// Float depths must stay finite, positive and strictly increasing (a range too
+// narrow for float resolution collapses neighbours).
+void check_depths(const Anchors& a, const char* what) {
+  for (std::size_t i = 0; i < a.depth.size(); ++i) {
+    const float d = a.depth[i];
+    if (!std::isfinite(d) || !(d > 0) || (i > 0 && !(d > a.depth[i - 1])))
+      throw Error(std::string(what) + " anchors: depth " + std::to_string(i) + " (" + num(d) +
+                  ") is not finite, positive and above the previous one in float32; widen the range");
+  }
 }
 
 // numpy.linspace(0, stop, n)[i] for i < n - 1: i * (stop / (n - 1)); the last
@@ -63,6 +82,7 @@ Anchors tangent_anchors(double start, double end, int n) {
     const double d = start + (t - t0) / (tmax - t0) * (end - start);
     out.depth[i] = static_cast<float>(d);
   }
+  check_depths(out, "tangent");
   return out;
 }
 
@@ -74,6 +94,7 @@ Anchors linear_anchors(double start, double end, int n) {
   out.end = end;
   out.depth.resize(n);
   for (int i = 0; i < n; ++i) out.depth[i] = static_cast<float>(linspace_at(start, end, n, i));
+  check_depths(out, "linear");
   return out;
 }
 
@@ -104,7 +125,7 @@ Anchors parse_anchor_spec(const std::string& spec, const std::string& source) {
   }
   if (v[2] != std::floor(v[2]) || !(v[2] >= 2) || v[2] > kMaxAnchors)
     throw Error(where + ": anchor count must be an integer in [2, " + std::to_string(kMaxAnchors) +
-                "] in '" + spec + "'");
+                "] in " + weights::quote_name(spec));
   try {
     return kind == "tangent" ? tangent_anchors(v[0], v[1], static_cast<int>(v[2]))
                              : linear_anchors(v[0], v[1], static_cast<int>(v[2]));

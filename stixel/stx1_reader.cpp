@@ -1,15 +1,12 @@
 // Bounds-checked proto3 wire-format reader for StixelWorld. Every read checks
 // the remaining bytes of the enclosing message first; errors give the byte
 // offset in the file and the field.
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstring>
 
 #include "stixel/error.h"
 #include "stixel/stx1.h"
+#include "weights/file_io.h"
 
 namespace stixel {
 namespace {
@@ -272,32 +269,10 @@ StixelWorld decode_stx1(const std::uint8_t* data, std::size_t size, const std::s
 }
 
 StixelWorld read_stx1(const std::string& path) {
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error(path + ": cannot open: " + std::strerror(errno));
-  struct stat st;
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    throw Error(path + ": not a regular file");
-  }
-  if (st.st_size > (static_cast<off_t>(1) << 31)) {
-    ::close(fd);
-    throw Error(path + ": file too large for a .stx1 (" + std::to_string(st.st_size) + " bytes)");
-  }
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(st.st_size));
-  std::size_t got = 0;
-  while (got < bytes.size()) {
-    ssize_t n = ::read(fd, bytes.data() + got, bytes.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int err = n < 0 ? errno : 0;
-      ::close(fd);
-      if (err) throw Error(path + ": read error: " + std::strerror(err));
-      break;
-    }
-    got += static_cast<std::size_t>(n);
-  }
-  ::close(fd);
-  bytes.resize(got);
+  // The one reader of outside files: regular files only, opened without blocking.
+  weights::FileBuffer bytes;
+  const std::string problem = weights::read_file(path, std::uint64_t(1) << 31, &bytes);
+  if (!problem.empty()) throw Error(path + ": " + problem);
   return decode_stx1(bytes.data(), bytes.size(), path);
 }
 

@@ -12,6 +12,8 @@
 #include <system_error>
 
 #ifdef __unix__
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #endif
 #ifdef __linux__
@@ -140,21 +142,69 @@ std::string read_open_file(std::FILE* f, std::uint64_t hint, std::uint64_t max_b
 
 }  // namespace
 
+std::FILE* open_regular_file(const std::string& path, std::uint64_t* size, std::string* problem) {
+  *size = 0;
+#ifdef __unix__
+  // O_NONBLOCK so that a FIFO without a writer (or a device) cannot block us in
+  // open(); the file type is checked on the open descriptor (no race with a
+  // rename between a stat and the open), and only regular files are read.
+  int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    int err = errno;
+    *problem = err == EISDIR ? "is a directory, expected a file" : "cannot open (" + errno_text(err) + ")";
+    return nullptr;
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0) {
+    *problem = "cannot stat (" + errno_text(errno) + ")";
+    ::close(fd);
+    return nullptr;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    *problem = S_ISDIR(st.st_mode)    ? "is a directory, expected a file"
+               : S_ISFIFO(st.st_mode) ? "is a pipe (FIFO), expected a regular file"
+               : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "is a device, expected a regular file"
+                                                            : "is not a regular file";
+    ::close(fd);
+    return nullptr;
+  }
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+  std::FILE* f = ::fdopen(fd, "rb");
+  if (!f) {
+    *problem = "cannot open (" + errno_text(errno) + ")";
+    ::close(fd);
+    return nullptr;
+  }
+  *size = static_cast<std::uint64_t>(st.st_size);
+  return f;
+#else
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    *problem = "is a directory, expected a file";
+    return nullptr;
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    *problem = ec ? "cannot open (" + ec.message() + ")" : "is not a regular file";
+    return nullptr;
+  }
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) *problem = "cannot open (" + errno_text(errno) + ")";
+  std::uintmax_t n = std::filesystem::file_size(path, ec);
+  if (!ec) *size = n;
+  return f;
+#endif
+}
+
 std::string read_file(const std::string& path, std::uint64_t max_bytes, FileBuffer* out) {
   *out = FileBuffer();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return "is a directory, expected a file";
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return "cannot open (" + errno_text(errno) + ")";
-  FileCloser closer{f};
-
+  std::string problem;
   // The size is only a hint for the first allocation; the read loop below is
-  // what enforces the limit (the file may change, or be a pipe).
+  // what enforces the limit (the file may change while we read it).
   std::uint64_t hint = 0;
-  if (std::filesystem::is_regular_file(path, ec)) {
-    std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec) hint = size;
-  }
+  std::FILE* f = open_regular_file(path, &hint, &problem);
+  if (!f) return problem;
+  FileCloser closer{f};
   if (hint > max_bytes) {
     return "file is " + std::to_string(hint) + " bytes, larger than the limit of " +
            std::to_string(max_bytes) + " bytes";
@@ -165,7 +215,6 @@ std::string read_file(const std::string& path, std::uint64_t max_bytes, FileBuff
     return "not enough memory to read it (" + std::to_string(hint) + " bytes)";
   }
 }
-
 
 std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces) {
   std::string tmp;

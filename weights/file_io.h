@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -43,10 +44,16 @@ class FileBuffer {
   std::size_t mapped_bytes_ = 0;  // non-zero when data_ is a mapping
 };
 
-// Reads the whole file into *out. Returns "" on success, otherwise the problem
-// without the path, e.g. "cannot open (No such file or directory)" or
-// "file is larger than the limit of 67108864 bytes". Works for pipes too: the
-// limit is enforced while reading, not only from the reported size.
+// Opens a regular file for reading without ever blocking: FIFOs, devices and
+// sockets are refused ("is a pipe (FIFO), expected a regular file"), since a
+// FIFO without a writer would hang open() and a device may never end. Returns
+// the stream and its size, or nullptr with the problem (without the path).
+std::FILE* open_regular_file(const std::string& path, std::uint64_t* size, std::string* problem);
+
+// Reads the whole regular file into *out. Returns "" on success, otherwise the
+// problem without the path, e.g. "cannot open (No such file or directory)" or
+// "file is larger than the limit of 67108864 bytes". The limit is enforced while
+// reading too, not only from the reported size (the file may grow).
 std::string read_file(const std::string& path, std::uint64_t max_bytes, FileBuffer* out);
 
 struct ByteSpan {

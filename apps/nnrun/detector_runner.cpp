@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "nn/models/detection/faster_rcnn.h"
+#include "weights/tensor_spec.h"
 
 namespace nnrun {
 namespace {
@@ -49,6 +50,9 @@ class DetectorRunner : public Runner {
     if (h < 32 || w < 32)
       throw weights::Error(in.source() + ": tensor 'input' is " + std::to_string(h) + "x" + std::to_string(w) +
                            ", smaller than the minimum 32x32");
+    // NaN/Inf in the input would give an all-NaN output and exit 0: refused,
+    // naming the file and the first bad element.
+    weights::check_tensors(in, {{"input", in.info("input").shape}});
     input_ = in.f32("input");
     model_.plan(h, w);
   }

@@ -16,6 +16,7 @@
 #include "apps/shle/frame_loader.h"
 #include "shle/box_source.h"
 #include "shle/error.h"
+#include "shle/file_read.h"
 #include "shle/pipeline.h"
 
 namespace {
@@ -26,8 +27,14 @@ struct BenchScene {
 };
 
 std::vector<BenchScene> read_listing(const std::string& root) {
-  std::ifstream f(root + "/benchmark.csv");
-  if (!f) throw shle::Error(root + "/benchmark.csv: cannot open (write it with shle_synth --benchmark)");
+  const std::string path = root + "/benchmark.csv";
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes = shle::read_file_bytes(path, 64ull << 20);
+  } catch (const shle::Error& e) {
+    throw shle::Error(std::string(e.what()) + " (write it with shle_synth --benchmark)");
+  }
+  std::istringstream f(std::string(bytes.begin(), bytes.end()));
   std::vector<BenchScene> out;
   std::string line;
   int line_no = 0;

@@ -176,6 +176,8 @@ int main(int argc, char** argv) {
       const bool normal = range == "normal";
       if (!normal && std::sscanf(range.c_str(), "%lf,%lf", &lo, &hi) != 2)
         args.fail("--range takes 'normal' or LO,HI");
+      if (!normal && !(std::isfinite(lo) && std::isfinite(hi) && lo <= hi && std::isfinite(hi - lo)))
+        args.fail("--range LO,HI needs finite numbers with LO <= HI, got '" + range + "'");
       std::size_t n = 1;
       for (auto d : shape) n *= static_cast<std::size_t>(d);
       if (n > (std::size_t{1} << 31)) args.fail("--shape is too large");

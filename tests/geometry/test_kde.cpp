@@ -119,4 +119,19 @@ TEST(Kde, RejectsBadInput) {
   EXPECT_THROW(geometry::gaussian_kde_mode(std::vector<double>{100.0}, o), geometry::Error);
 }
 
+// Issue 12, row 8: the grid's length (largest sample / step) is bounded before the
+// loop: a step of 1e-9 m used to walk up to 2^52 grid points.
+TEST(Kde, GridLongerThan2To26PointsIsRefusedAtOnce) {
+  geometry::KdeOptions o;
+  o.grid_step = 1e-9;
+  try {
+    geometry::gaussian_kde_mode(std::vector<double>{10.0, 12.0}, o);
+    ADD_FAILURE() << "no error";
+  } catch (const geometry::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("above the limit of 2^26 points"), std::string::npos) << e.what();
+  }
+  o.grid_step = 1.0;  // 2^26 exactly is allowed
+  EXPECT_NO_THROW(geometry::gaussian_kde_mode(std::vector<double>{67108864.0}, o));
+}
+
 }  // namespace

@@ -296,6 +296,17 @@ TEST_F(NnrunCli, InputSmallerThan32x32) {
   EXPECT_FALSE(output_exists());
 }
 
+// Issue 12, row 10: NaN/Inf in the input used to give an all-NaN output and exit 0.
+TEST_F(NnrunCli, NanOrInfInTheInputIsRefused) {
+  for (float bad : {NAN, -INFINITY}) {
+    write_input("bad.safetensors", {1, 3, 64, 96}, bad);
+    Result r = run("w.safetensors", "bad.safetensors");
+    expect_input_error(this, r, path("bad.safetensors"), std::isnan(bad) ? "'input' contains NaN (element 0)"
+                                                                          : "'input' contains Inf (element 0)");
+    EXPECT_FALSE(output_exists());
+  }
+}
+
 TEST_F(NnrunCli, MissingInputFileAndUsageErrors) {
   Result r = run("w.safetensors", "nope.safetensors");
   expect_input_error(this, r, path("nope.safetensors"), "");

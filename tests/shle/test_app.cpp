@@ -1,5 +1,6 @@
 // The shle command end to end on a synthetic sequence, and its failure modes.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <sys/wait.h>
 
@@ -300,5 +301,45 @@ TEST(ShleApp, EvalBadHeightNamesFileLineAndValue) {
     EXPECT_NE(r.err.find("benchmark.csv: line 2: height '" + h + "' is not a positive finite number"), std::string::npos)
         << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
+// Issue 12, rows 8-10 through the app: one line, exit code, no output written.
+TEST(ShleApp, HostileParametersAndSpecialFiles) {
+  TempDir dir;
+  const std::string app = SHLE_APP, seq = sequence(), out = dir / "o";
+  Result r = run(app + " --sequence '" + seq + "' --calib '" + seq + "/calib.json' --grid-step 1e-9 --out-dir '" +
+                     out + "'",
+                 dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("KDE grid step must be a number in [0.001, 1000] metres"), std::string::npos) << r.err;
+  const std::string fifo = dir / "calib.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // `timeout` turns a regression (open() blocking on the FIFO) into a failure.
+  for (const std::string& args : {" --calib '" + fifo + "'", " --calib '" + seq + "/calib.json' --boxes '" + fifo + "'"}) {
+    r = run("timeout 20 " + app + " --sequence '" + seq + "'" + args + " --out-dir '" + out + "'", dir);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_EQ(r.err, "shle: " + fifo + ": is a pipe (FIFO), expected a regular file\n") << args;
+  }
+  shletest::write_text(dir / "huge.json",
+                       "{\"fx\": 700, \"fy\": 700, \"cx\": 0, \"cy\": 0, \"bf\": 240, \"width\": 65535, "
+                       "\"height\": 65535}");
+  r = run(app + " --sequence '" + seq + "' --calib '" + (dir / "huge.json") + "' --out-dir '" + out + "'", dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("huge.json: 'width' x 'height' is 65535x65535, above the limit of 256 Mpx"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out + "/frames.csv"));
+  EXPECT_FALSE(fs::exists(out + "/summary.json"));
+}
+
+// Issue 12, row 10: `synth --range nan,1` used to write an all-NaN input and exit 0.
+TEST(SynthApp, NonFiniteRangeIsAUsageError) {
+  TempDir dir;
+  for (const char* range : {"nan,1", "0,inf", "2,1", "-1e308,1e308"}) {
+    Result r = run(std::string(SYNTH_APP) + " --shape 1,3,4,4 --range " + range + " --out '" + (dir / "x.st") + "'",
+                   dir);
+    EXPECT_EQ(r.code, 2) << range;
+    EXPECT_NE(r.err.find("--range LO,HI needs finite numbers with LO <= HI"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "x.st")) << range;
   }
 }

@@ -1,7 +1,14 @@
 // Data parsers on files written byte by byte, and their malformed variants.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cmath>
 #include <cstring>
+#include <functional>
+#include <future>
+#include <memory>
 
 #include "shle/box_source.h"
 #include "shle/boxes_csv.h"
@@ -11,6 +18,8 @@
 #include "shle/error.h"
 #include "shle/labelme.h"
 #include "tests/error_of.h"
+#include "tests/process_memory.h"
+#include "shle/height.h"
 #include "tests/shle/test_util.h"
 #include "weights/json.h"
 
@@ -393,4 +402,86 @@ TEST(HostileMessages, CalibrationKeyAndBoxesFieldsStayOnePrintableLine) {
     const std::string m = testutil::error_of([&] { shle::parse_boxes_csv(row, "b.csv"); });
     EXPECT_TRUE(testutil::is_one_printable_line(m, 400)) << m.size() << ": " << m.substr(0, 200);
   }
+}
+
+// Issue 12, rows 8-10: limits before allocation, special files, non-finite values.
+namespace {
+
+// Runs `f` on another thread and fails (instead of hanging) if it blocks.
+std::string error_within_seconds(const std::function<void()>& f, int seconds) {
+  auto result = std::async(std::launch::async, [&] { return testutil::error_of(f); });
+  if (result.wait_for(std::chrono::seconds(seconds)) != std::future_status::ready) {
+    ADD_FAILURE() << "blocked for more than " << seconds << " s";
+    std::_Exit(1);  // the blocked thread cannot be joined
+  }
+  return result.get();
+}
+
+}  // namespace
+
+TEST(HostileFiles, FifoCalibrationAndBoxesAreRefusedWithoutBlocking) {
+  TempDir dir;
+  const std::string calib = dir / "calib.json", boxes = dir / "boxes.csv", dat = dir / "d.dat";
+  for (const std::string& p : {calib, boxes, dat}) ASSERT_EQ(::mkfifo(p.c_str(), 0600), 0);
+  EXPECT_EQ(error_within_seconds([&] { shle::load_calibration(calib); }, 10),
+            calib + ": is a pipe (FIFO), expected a regular file");
+  EXPECT_EQ(error_within_seconds([&] { shle::load_boxes_csv(boxes); }, 10),
+            boxes + ": is a pipe (FIFO), expected a regular file");
+  EXPECT_EQ(error_within_seconds([&] { shle::read_dat(dat, 3, 2, 5); }, 10),
+            dat + ": is a pipe (FIFO), expected a regular file");
+  EXPECT_EQ(error_within_seconds([&] { shle::read_pfm("/dev/zero"); }, 10),
+            "/dev/zero: is a device, expected a regular file");
+}
+
+TEST(HostileFiles, CalibratedSizeIsLimitedAndCommitsNoMemory) {
+  const std::string base = "{\"fx\": 700, \"fy\": 700, \"cx\": 640, \"cy\": 360, \"bf\": 240";
+  // 65535 x 65535 used to end in "shle: std::bad_alloc" with no file named.
+  EXPECT_EQ(testutil::error_of([&] {
+              shle::parse_calibration(json::parse(base + ", \"width\": 65535, \"height\": 65535}", "c.json"), "c.json");
+            }),
+            "c.json: 'width' x 'height' is 65535x65535, above the limit of 256 Mpx");
+  // 12000 x 12000 is allowed, and building the estimator no longer preallocates
+  // 3.4 GB of scratch for it (only the capped 4 Mpx).
+  shle::Calibration c =
+      shle::parse_calibration(json::parse(base + ", \"width\": 12000, \"height\": 12000}", "c.json"), "c.json");
+  const long before = testutil::rss_kib();
+  auto est = std::make_unique<shle::HeightEstimator>(c, shle::HeightOptions{});
+  const long grown_mib = (testutil::rss_kib() - before) / 1024;
+  EXPECT_LT(grown_mib, 400) << "the estimator committed " << grown_mib << " MiB";
+}
+
+TEST(HostileFiles, BaselineTimesFocalLengthOverflowIsAnError) {
+  EXPECT_EQ(testutil::error_of([&] {
+              shle::parse_calibration(
+                  json::parse("{\"fx\": 1e300, \"fy\": 1, \"cx\": 0, \"cy\": 0, \"baseline\": 1e300}", "c.json"),
+                  "c.json");
+            }),
+            "c.json: 'baseline' x 'fx' overflows to infinity (inf)");
+}
+
+TEST(HostileFiles, GridStepIsBoundedBeforeAnyLoop) {
+  shle::HeightOptions o;
+  o.grid_step = 1e-9;  // used to loop over up to 2^52 KDE grid points
+  EXPECT_EQ(testutil::error_of([&] { shle::validate(o); }),
+            "KDE grid step must be a number in [0.001, 1000] metres (kMinGridStep, kMaxGridStep)");
+  o.grid_step = std::nan("");
+  EXPECT_THROW(shle::validate(o), shle::Error);
+}
+
+TEST(HostileFiles, AllNanPfmSaysWhyThereIsNoHeight) {
+  // A 4x4 little-endian PFM of NaN: the height stage names the NaNs.
+  std::string pfm = "Pf\n4 4\n-1\n";
+  const float nan = std::nanf("");
+  for (int i = 0; i < 16; ++i) pfm.append(reinterpret_cast<const char*>(&nan), 4);
+  shle::DisparityMap m =
+      shle::parse_pfm(reinterpret_cast<const std::uint8_t*>(pfm.data()), pfm.size(), "nan.pfm");
+  shle::Calibration c;
+  c.width = 4;
+  c.height = 4;
+  shle::HeightEstimator est(c, shle::HeightOptions{});
+  shle::Box box{0, 0, 4, 4};
+  shle::HeightResult r = est.estimate(m, box);
+  EXPECT_FALSE(r.has_height);
+  EXPECT_NE(r.problem.find("no valid disparity in the box (16 of its 16 values are NaN or Inf)"), std::string::npos)
+      << r.problem;
 }

@@ -59,7 +59,10 @@ TEST(Anchors, SpecRoundTrip) {
 TEST(Anchors, BadSpecsAreErrors) {
   for (const char* spec : {"", "log:1,2,3", "linear", "linear:5,69", "linear:5,69,64,1",
                            "linear:5;69;64", "tangent:66,4,64", "tangent:4,66,1", "linear:0,10,64",
-                           "linear:5,69,6.5", "tangent:4,66,x", "linear:nan,5,3"}) {
+                           "linear:5,69,6.5", "tangent:4,66,x", "linear:nan,5,3",
+                           // issue 12, row 10: beyond float32, or too narrow for it
+                           "tangent:1e-300,1e300,64", "linear:1e-300,1,64", "tangent:1,1e39,64",
+                           "linear:1,1.0000001,64"}) {
     try {
       stixel::parse_anchor_spec(spec, "weights.safetensors");
       ADD_FAILURE() << "no error for '" << spec << "'";
@@ -67,6 +70,12 @@ TEST(Anchors, BadSpecsAreErrors) {
       EXPECT_EQ(std::string(e.what()).rfind("weights.safetensors: ", 0), 0u) << e.what();
     }
   }
+  // From a model's metadata the error names the file and the key.
+  const std::string m = testutil::error_of([] {
+    stixel::settings_from_metadata({{"stixelnext.anchors", "tangent:1e-300,1e300,64"}}, "w.safetensors");
+  });
+  EXPECT_EQ(m.rfind("w.safetensors: metadata stixelnext.anchors: tangent anchors: start and end must lie in the float range", 0),
+            0u) << m;
 }
 
 // Issue 12, finding 5: an anchor spec or a metadata value from a model file is quoted
