@@ -216,15 +216,27 @@ std::string read_file(const std::string& path, std::uint64_t max_bytes, FileBuff
   }
 }
 
-std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces) {
+
+std::string write_temporary_file(const std::string& path, const std::vector<ByteSpan>& pieces,
+                                 std::string* temporary, const TemporaryFileHooks* hooks) {
+  temporary->clear();
+  auto creating = [&](const std::string& name) {
+    if (hooks && hooks->creating) hooks->creating(name);
+  };
+  auto released = [&](const std::string& name) {
+    if (hooks && hooks->released) hooks->released(name);
+  };
   std::string tmp;
   std::FILE* f = nullptr;
   for (unsigned attempt = 0; attempt < 100 && !f; ++attempt) {
     tmp = temporary_name(path, attempt);
+    creating(tmp);
     // "x": fail rather than reuse a name someone else is writing.
     f = std::fopen(tmp.c_str(), "wbx");
-    if (!f && errno != EEXIST) {
-      return "cannot create temporary file '" + tmp + "' (" + errno_text(errno) + ")";
+    if (!f) {
+      const int err = errno;
+      released(tmp);
+      if (err != EEXIST) return "cannot create temporary file '" + tmp + "' (" + errno_text(err) + ")";
     }
   }
   if (!f) return "cannot create a temporary file next to it (all names taken)";
@@ -232,6 +244,7 @@ std::string write_file_atomically(const std::string& path, const std::vector<Byt
   auto fail = [&](const std::string& what, int err) {
     if (f) std::fclose(f);
     std::remove(tmp.c_str());
+    released(tmp);
     return what + " (" + errno_text(err) + ")";
   };
   for (const ByteSpan& piece : pieces) {
@@ -247,9 +260,22 @@ std::string write_file_atomically(const std::string& path, const std::vector<Byt
   int closed = std::fclose(f);
   f = nullptr;
   if (closed != 0) return fail("write error", errno);
+  *temporary = tmp;
+  return "";
+}
+
+std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces,
+                                  const TemporaryFileHooks* hooks) {
+  std::string tmp;
+  std::string problem = write_temporary_file(path, pieces, &tmp, hooks);
+  if (!problem.empty()) return problem;
+  int err = 0;
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    return fail("cannot rename temporary file '" + tmp + "' into place", errno);
+    err = errno;
+    std::remove(tmp.c_str());
   }
+  if (hooks && hooks->released) hooks->released(tmp);
+  if (err) return "cannot rename temporary file '" + tmp + "' into place (" + errno_text(err) + ")";
   return "";
 }
 

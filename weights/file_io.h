@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -61,10 +62,30 @@ struct ByteSpan {
   std::size_t size;
 };
 
-// Writes the concatenated pieces to a temporary file in the same directory,
-// flushes it to disk and renames it over `path`, so readers see either the old
+// Lets a caller know which temporary file a write uses, so that it can remove the
+// file should the process be interrupted (the library installs no signal handlers
+// and keeps no list of its own). `creating(name)` runs before the temporary is
+// created, so no moment exists in which the file is there and the caller does not
+// know it; `released(name)` once the name needs no removing any more: after the
+// rename, after a failed creation, or after the file was removed on failure.
+// Either may be empty. Exceptions they throw propagate (after cleaning up).
+struct TemporaryFileHooks {
+  std::function<void(const std::string& temporary)> creating;
+  std::function<void(const std::string& temporary)> released;
+};
+
+// Writes the concatenated pieces to a new temporary file beside `path` (same folder,
+// so a rename replaces `path` in one step), flushed to disk, and stores its name in
+// *temporary. Returns "" on success, otherwise the problem (without the path) and
+// the temporary is removed. On success the caller owns the temporary: it renames or
+// removes it, then calls hooks->released itself.
+std::string write_temporary_file(const std::string& path, const std::vector<ByteSpan>& pieces,
+                                 std::string* temporary, const TemporaryFileHooks* hooks = nullptr);
+
+// write_temporary_file, then a rename over `path`, so readers see either the old
 // file or the complete new one. Returns "" on success, otherwise the problem
 // (without the path); on failure the temporary file is removed.
-std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces);
+std::string write_file_atomically(const std::string& path, const std::vector<ByteSpan>& pieces,
+                                  const TemporaryFileHooks* hooks = nullptr);
 
 }  // namespace weights

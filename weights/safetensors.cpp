@@ -521,13 +521,13 @@ std::vector<std::uint8_t> Writer::bytes() const {
   return out;
 }
 
-void Writer::write(const std::string& path) const {
+void Writer::write(const std::string& path, const TemporaryFileHooks* hooks) const {
   std::string h = header();
   std::uint8_t len[8];
   std::uint64_t n = h.size();
   for (int i = 0; i < 8; ++i) len[i] = static_cast<std::uint8_t>(n >> (8 * i));
   std::string problem =
-      write_file_atomically(path, {{len, 8}, {h.data(), h.size()}, {data_.data(), data_.size()}});
+      write_file_atomically(path, {{len, 8}, {h.data(), h.size()}, {data_.data(), data_.size()}}, hooks);
   if (!problem.empty()) throw Error(path + ": " + problem);
 }
 

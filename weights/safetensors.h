@@ -112,8 +112,10 @@ class Writer {
   // starts at a multiple of 64 bytes.
   std::vector<std::uint8_t> bytes() const;
   // Writes via a temporary file in the same directory and a rename: never leaves
-  // a partial file. Throws Error "<path>: <problem>" on I/O failure.
-  void write(const std::string& path) const;
+  // a partial file. Throws Error "<path>: <problem>" on I/O failure. `hooks` tell
+  // the caller the temporary's name (weights/file_io.h), e.g. to remove it when
+  // the program is interrupted.
+  void write(const std::string& path, const TemporaryFileHooks* hooks = nullptr) const;
 
  private:
   std::string header() const;

@@ -7,6 +7,8 @@
 // is truncated or corrupt with "path: problem".
 #include "apps/common/image_io.h"
 
+#include "apps/common/output_files.h"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -334,45 +336,10 @@ void save_png(const std::string& path, const std::uint8_t* pixels, int width, in
   } catch (const Error& e) {
     fail(path, e.what());
   }
-  write_file_atomic(path, png.data(), png.size());
-}
-
-void write_file_atomic(const std::string& path, const void* data, std::size_t size) {
-  if (path.empty()) throw Error("write_file_atomic: empty output path");
-  // The temporary lives beside the target so that rename() stays on one file system
-  // and replaces the target in one step; readers see the old file or the new one.
-  std::string dir, base;
-  std::size_t slash = path.find_last_of('/');
-  if (slash == std::string::npos) {
-    dir = "";
-    base = path;
-  } else {
-    dir = path.substr(0, slash + 1);
-    base = path.substr(slash + 1);
-  }
-  if (base.empty()) fail(path, "output path names a folder, not a file");
-  static std::atomic<unsigned> counter{0};
-  std::string tmp = dir + "." + base + ".tmp-" + std::to_string(::getpid()) + "-" +
-                    std::to_string(counter.fetch_add(1));
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-  if (fd < 0) fail(path, "cannot create temporary file: " + errno_text(errno));
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  std::size_t done = 0;
-  int err = 0;
-  while (done < size) {
-    ssize_t n = ::write(fd, p + done, size - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      err = errno;
-      break;
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::close(fd) != 0 && err == 0) err = errno;
-  if (err == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
-  if (err != 0) {
-    ::unlink(tmp.c_str());
-    fail(path, "cannot write: " + errno_text(err));
+  try {
+    outputs::write_file(path, png.data(), png.size());
+  } catch (const outputs::Error& e) {
+    throw Error(e.what());
   }
 }
 

@@ -29,11 +29,9 @@ Image load(const std::string& path, int want_channels = 0, bool keep_16bit = fal
 std::vector<std::uint8_t> encode_png(const std::uint8_t* pixels, int width, int height,
                                      int channels);
 
-// Writes a PNG atomically (temporary file, then rename); never leaves a partial file.
+// Writes a PNG atomically (outputs::write_file: temporary file, then rename); never
+// leaves a partial file. Sets of files: encode_png and outputs::FileSet.
 void save_png(const std::string& path, const std::uint8_t* pixels, int width, int height,
               int channels);
-
-// Writes bytes atomically (temporary file in the same folder, then rename).
-void write_file_atomic(const std::string& path, const void* data, std::size_t size);
 
 }  // namespace imageio

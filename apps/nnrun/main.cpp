@@ -11,6 +11,7 @@
 
 #include "apps/common/cli.h"
 #include "apps/common/exec_env.h"
+#include "apps/common/output_files.h"
 #include "apps/common/precision_option.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/nnrun/detector_runner.h"
@@ -129,6 +130,14 @@ int main(int argc, char** argv) {
     args.fail("--precision " + precision_name + ": model '" + model + "' runs in f32 only (ConvNeXt models have bf16)");
 
   try {
+    // Before anything is read or written: the output must not replace an input.
+    outputs::Plan plan;
+    plan.input(weights_path, "weights");
+    plan.input(input_path, "input");
+    plan.output(output_path);
+    plan.check();
+    outputs::install_interrupt_cleanup();
+
     std::unique_ptr<nnrun::Runner> runner;
     {
       // The file's bytes are released once the model has repacked them.
@@ -152,7 +161,7 @@ int main(int argc, char** argv) {
     out.set_metadata("format", "roadnn-v1");
     out.set_metadata("model", model);
     runner->write_outputs(out);
-    out.write(output_path);
+    out.write(output_path, &outputs::temporary_file_hooks());
 
     if (repeat > 0 || profile) {
       runner->profiler().set_enabled(profile);

@@ -11,6 +11,7 @@
 #include "apps/common/cli.h"
 #include "apps/common/exec_env.h"
 #include "apps/common/image_io.h"
+#include "apps/common/output_files.h"
 #include "apps/shle/frame_loader.h"
 #include "apps/shle/height_plot.h"
 #include "apps/shle/report.h"
@@ -177,6 +178,33 @@ int main(int argc, char** argv) {
   }
 
   try {
+    shle::Sequence seq = shle::scan_sequence(sequence);
+    const std::filesystem::path out(out_dir);
+    const std::string csv_path = (out / "frames.csv").string(), summary_path = (out / "summary.json").string(),
+                      plot_path = (out / "heights.png").string();
+    {
+      // Before anything is read or written: no output may replace an input.
+      outputs::Plan plan;
+      std::error_code ec;
+      if (std::filesystem::is_directory(calib, ec)) {
+        for (const auto& e : std::filesystem::directory_iterator(calib, ec)) plan.input(e.path().string(), "calibration");
+      } else {
+        plan.input(calib, "calibration");
+      }
+      if (!detector && boxes != "annotations") plan.input(boxes, "boxes file");
+      if (detector) plan.input(det_weights, "detector weights");
+      for (const shle::FrameFiles& f : seq.frames) {
+        plan.input(f.image);
+        plan.input(f.annotation);
+        if (!f.disparity.empty()) plan.input(f.disparity);
+      }
+      plan.output(csv_path);
+      plan.output(summary_path);
+      plan.output(plot_path);
+      plan.check();
+    }
+    outputs::install_interrupt_cleanup();
+
     shle::Calibration cal;
     if (calib_format == "plain")
       cal = shle::load_calibration(calib);
@@ -188,7 +216,6 @@ int main(int argc, char** argv) {
       if (!(bf > 0) || !std::isfinite(bf)) p.fail("--bf must be > 0");
       cal.bf = bf;
     }
-    shle::Sequence seq = shle::scan_sequence(sequence);
     std::unique_ptr<shle::BoxSource> source;
     shleapp::DetectorDescription det_desc;
     if (boxes == "annotations") {
@@ -242,10 +269,13 @@ int main(int argc, char** argv) {
     plot.has_scene = run.heights.has_scene_height;
     plot.scene = run.heights.scene_height;
     shleapp::Canvas canvas = shleapp::draw_height_plot(plot);
-    const std::filesystem::path out(out_dir);
-    imageio::write_file_atomic((out / "frames.csv").string(), csv.data(), csv.size());
-    imageio::write_file_atomic((out / "summary.json").string(), summary.data(), summary.size());
-    imageio::save_png((out / "heights.png").string(), canvas.rgb().data(), canvas.width(), canvas.height(), 3);
+    // The three files are one set: all written as temporaries, then renamed, so an
+    // interrupted run never leaves this run's frames.csv beside the last run's summary.
+    outputs::FileSet set;
+    set.add(csv_path, csv);
+    set.add(summary_path, summary);
+    set.add(plot_path, imageio::encode_png(canvas.rgb().data(), canvas.width(), canvas.height(), 3));
+    set.commit();
 
     if (run.heights.has_scene_height) {
       std::printf("scene height %.3f m over %zu of %zu frames", run.heights.scene_height, run.frames_used,

@@ -8,7 +8,7 @@
 
 #include "apps/common/cli.h"
 #include "apps/common/exec_env.h"
-#include "apps/common/image_io.h"
+#include "apps/common/output_files.h"
 #include "apps/shle/synth_writer.h"
 #include "shle/error.h"
 #include "shle/synth.h"
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
     p.fail("--layout must be released, plain-dat or plain-pfm");
   if (seed < 0) p.fail("--seed must be >= 0");
 
+  outputs::install_interrupt_cleanup();
   try {
     std::vector<shle::synth::SceneSpec> specs;
     std::vector<std::string> dirs;
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
     }
     if (benchmark) {
       std::string path = (std::filesystem::path(out) / "benchmark.csv").string();
-      imageio::write_file_atomic(path, listing.data(), listing.size());
+      outputs::write_file(path, listing.data(), listing.size());
     }
     return 0;
   } catch (const std::exception& e) {

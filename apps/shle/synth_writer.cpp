@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "apps/common/image_io.h"
+#include "apps/common/output_files.h"
 #include "shle/labelme.h"
 #include "weights/json.h"
 
@@ -19,8 +20,6 @@ std::string num(double v, const char* f = "%.6f") {
   return b;
 }
 
-void write_text(const fs::path& p, const std::string& s) { imageio::write_file_atomic(p.string(), s.data(), s.size()); }
-
 }  // namespace
 
 void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, SynthLayout layout,
@@ -33,8 +32,11 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
   fs::create_directories(img_dir);
   fs::create_directories(disp_dir);
 
+  // Each frame's files (image, LabelMe, disparity) are one set, written as temporaries
+  // and then renamed; calib.json, truth.json and detections.csv come last, together,
+  // so a sequence with truth.json is complete.
   shle::Calibration cal = scene.calibration();
-  write_text(root / "calib.json",
+  const std::string calib_json = (
              "{\"fx\": " + num(cal.intrinsics.fx, "%.10g") + ", \"fy\": " + num(cal.intrinsics.fy, "%.10g") +
                  ", \"cx\": " + num(cal.intrinsics.cx, "%.10g") + ", \"cy\": " + num(cal.intrinsics.cy, "%.10g") +
                  ", \"bf\": " + num(cal.bf, "%.10g") + ", \"mount_height\": " + num(cal.mount_height, "%.10g") +
@@ -55,11 +57,12 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
     else
       std::snprintf(stem, sizeof stem, "%06d", k);
     const std::string image_name = std::string(stem) + ".png";
-    imageio::save_png((img_dir / image_name).string(), f.image.rgb.data(), f.image.width, f.image.height, 3);
+    outputs::FileSet set;
+    set.add((img_dir / image_name).string(), imageio::encode_png(f.image.rgb.data(), f.image.width, f.image.height, 3));
     std::vector<shle::Box> boxes;
     if (f.visible) boxes.push_back(f.box);
-    write_text(img_dir / (std::string(stem) + ".json"),
-               shle::labelme_json(image_name, f.image.width, f.image.height, boxes));
+    set.add((img_dir / (std::string(stem) + ".json")).string(),
+            shle::labelme_json(image_name, f.image.width, f.image.height, boxes));
     const std::size_t N = f.disparity.size();
     if (layout == SynthLayout::PlainPfm) {
       std::string header = "Pf\n" + std::to_string(f.image.width) + " " + std::to_string(f.image.height) + "\n-1\n";
@@ -71,7 +74,7 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
           std::memcpy(b, &d, 4);  // little-endian host (checked by weights/safetensors.h)
           bytes.insert(bytes.end(), b, b + 4);
         }
-      imageio::write_file_atomic((disp_dir / (std::string(stem) + ".pfm")).string(), bytes.data(), bytes.size());
+      set.add((disp_dir / (std::string(stem) + ".pfm")).string(), bytes);
     } else {
       std::vector<std::uint8_t> bytes(2 * N);
       for (std::size_t i = 0; i < N; ++i) {
@@ -80,8 +83,9 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
       }
       std::string name = released ? "disparity_5" + std::string(stem).substr(std::strlen("left")) + ".dat"
                                   : std::string(stem) + ".dat";
-      imageio::write_file_atomic((disp_dir / name).string(), bytes.data(), bytes.size());
+      set.add((disp_dir / name).string(), bytes);
     }
+    set.commit();
     for (const shle::Candidate& c : f.detections)
       dets += std::to_string(k) + "," + num(c.box.x0, "%.2f") + "," + num(c.box.y0, "%.2f") + "," +
               num(c.box.x1, "%.2f") + "," + num(c.box.y1, "%.2f") + "," + num(c.score, "%.4f") + "\n";
@@ -96,8 +100,11 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
     if (progress) progress(k + 1, n);
   }
   truth += "\n  ]\n}\n";
-  write_text(root / "truth.json", truth);
-  write_text(root / "detections.csv", dets);
+  outputs::FileSet last;
+  last.add((root / "calib.json").string(), calib_json);
+  last.add((root / "truth.json").string(), truth);
+  last.add((root / "detections.csv").string(), dets);
+  last.commit();
 }
 
 }  // namespace shleapp

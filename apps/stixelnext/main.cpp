@@ -16,6 +16,7 @@
 #include "apps/common/exec_env.h"
 #include "apps/common/precision_option.h"
 #include "apps/common/image_io.h"
+#include "apps/common/output_files.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/stixelnext/calibration.h"
 #include "nn/isa.h"
@@ -139,6 +140,27 @@ int main(int argc, char** argv) {
   nn::set_num_threads(threads);
   const nn::Precision prec = apps::precision_option(args, precision);
 
+  // Every output of the run, known before anything is read or written: none may
+  // replace an input or another output (two same.png from different folders).
+  auto output_base = [&](const std::string& image) { return out_dir + "/" + clean_name(stem_of(image)); };
+  try {
+    outputs::Plan plan;
+    plan.input(weights_path, "weights");
+    if (!calib_path.empty()) plan.input(calib_path, "calibration");
+    for (const std::string& image : images) plan.input(image);
+    for (const std::string& image : images) {
+      const std::string base = output_base(image);
+      plan.output(base + "." + format, image);
+      if (overlay) plan.output(base + "_overlay.png", image);
+      if (bev) plan.output(base + "_bev.png", image);
+    }
+    plan.check();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stixelnext: %s\n", e.what());
+    return 1;
+  }
+  outputs::install_interrupt_cleanup();
+
   std::unique_ptr<stixel::Predictor> predictor;
   stixelnext::Calibration calib;
   try {
@@ -233,21 +255,22 @@ int main(int argc, char** argv) {
       stixel::RgbImage bg;
       if (overlay || embed_image) bg = background_at(img, W, H);
       timer.time(kEncode, [&] {
+        // One image's outputs appear together or not at all: all are written as
+        // temporaries first, then renamed.
         if (embed_image) world.image = imageio::encode_png(bg.pixels.data(), W, H, 3);
-        const std::string base = out_dir + "/" + name;
+        const std::string base = output_base(path);
+        outputs::FileSet set;
         if (format == "stx1") {
-          auto bytes = stixel::encode_stx1(world);
-          imageio::write_file_atomic(base + ".stx1", bytes.data(), bytes.size());
+          set.add(base + ".stx1", stixel::encode_stx1(world));
         } else {
-          const std::string text = format == "csv" ? stixel::to_csv(world, {path, false}) : stixel::to_json(world);
-          imageio::write_file_atomic(base + "." + format, text.data(), text.size());
+          set.add(base + "." + format, format == "csv" ? stixel::to_csv(world, {path, false}) : stixel::to_json(world));
         }
         if (overlay) {
           stixel::OverlayOptions oo;
           oo.min_confidence = threshold;
           oo.color_by_cluster = cluster;
           auto pic = stixel::render_overlay(world, bg, oo);
-          imageio::save_png(base + "_overlay.png", pic.pixels.data(), pic.width, pic.height, 3);
+          set.add(base + "_overlay.png", imageio::encode_png(pic.pixels.data(), pic.width, pic.height, 3));
         }
         if (bev) {
           stixel::BevOptions bo;
@@ -256,8 +279,9 @@ int main(int argc, char** argv) {
           bo.forward_axis = axis_b;
           if (cluster) bo.color = stixel::BevOptions::Color::Cluster;
           auto pic = stixel::render_bev(world, *frame.projection, bo);
-          imageio::save_png(base + "_bev.png", pic.pixels.data(), pic.width, pic.height, 3);
+          set.add(base + "_bev.png", imageio::encode_png(pic.pixels.data(), pic.width, pic.height, 3));
         }
+        set.commit();
         return 0;
       });
       ++done;

@@ -13,6 +13,7 @@
 
 #include "apps/common/cli.h"
 #include "apps/common/exec_env.h"
+#include "apps/common/output_files.h"
 #include "nn/models/convnext.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
@@ -141,6 +142,9 @@ int main(int argc, char** argv) {
   if (args.given("classes") && !is_detector) args.fail("--classes applies to the fasterrcnn_* models only");
   if (classes < 1 || classes > 10000) args.fail("--classes must be in 1..10000 (background included)");
 
+  if (out.empty()) args.fail("--out must not be empty");
+  // Interrupted, synth leaves the previous file (or none), never a temporary.
+  outputs::install_interrupt_cleanup();
   try {
     nn::SplitMix64 rng(static_cast<std::uint64_t>(seed));
     weights::Writer w;
@@ -149,7 +153,8 @@ int main(int argc, char** argv) {
       if (std::sscanf(image_size.c_str(), "%dx%d", &iw, &ih) != 2 || iw < 8 || ih < 8 || iw > 16384 || ih > 16384)
         args.fail("--image takes WxH, e.g. 1920x1280");
       auto px = road_scene(iw, ih, rng);
-      imageio::save_png(out, px.data(), iw, ih, 3);
+      const std::vector<std::uint8_t> png = imageio::encode_png(px.data(), iw, ih, 3);
+      outputs::write_file(out, png.data(), png.size());
       return 0;
     }
     if (!model.empty()) {
@@ -185,7 +190,7 @@ int main(int argc, char** argv) {
       for (auto& x : v) x = static_cast<float>(normal ? rng.normal() : lo + (hi - lo) * rng.uniform());
       w.add_f32("input", shape, v.data());
     }
-    w.write(out);
+    w.write(out, &outputs::temporary_file_hooks());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "synth: %s\n", e.what());
     return 1;

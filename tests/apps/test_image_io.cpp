@@ -325,25 +325,6 @@ TEST(ImageIo, UnreadableOrUnsupportedFiles) {
   expect_error([&] { imageio::load(dir + "/ok.png", 7); }, dir + "/ok.png", "channel count");
 }
 
-TEST(ImageIo, AtomicWriteReplacesAndLeavesNoTemporary) {
-  std::string dir = test_dir();
-  std::string path = dir + "/out.bin";
-  Bytes a(1000, 1), b(5, 2);
-  imageio::write_file_atomic(path, a.data(), a.size());
-  EXPECT_EQ(read_raw(path), a);
-  imageio::write_file_atomic(path, b.data(), b.size());
-  EXPECT_EQ(read_raw(path), b);
-  imageio::write_file_atomic(path, nullptr, 0);
-  EXPECT_TRUE(read_raw(path).empty());
-  EXPECT_EQ(folder_entries(dir), std::vector<std::string>{"out.bin"});
-  // Permissions follow the umask like an ordinary file, not mkstemp's 0600.
-  struct stat st;
-  ASSERT_EQ(::stat(path.c_str(), &st), 0);
-  mode_t mask = ::umask(0);
-  ::umask(mask);
-  EXPECT_EQ(st.st_mode & 0777, 0666u & ~mask);
-}
-
 TEST(ImageIo, FailedWritesLeaveNothingBehind) {
   std::string dir = test_dir();
   Bytes px = pattern(4, 4, 3);

@@ -4,9 +4,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -421,4 +423,44 @@ TEST_F(NnrunCli, EmptyOutputPathIsAUsageError) {
   std::stringstream e;
   e << std::ifstream(path("stderr")).rdbuf();
   EXPECT_NE(e.str().find("must not be empty"), std::string::npos) << e.str();
+}
+
+// Issue 12 item 5, finding 6: an --output that is the --input or the --weights, under
+// any spelling or through a symlink, is refused in one line before anything is
+// written; the file keeps its bytes and no other file appears.
+TEST_F(NnrunCli, OutputThatIsAnInputIsRefused) {
+  ASSERT_EQ(::symlink(path("x.safetensors").c_str(), path("link.safetensors").c_str()), 0);
+  auto bytes_of = [&](const std::string& f) {
+    std::stringstream s;
+    s << std::ifstream(path(f), std::ios::binary).rdbuf();
+    return s.str();
+  };
+  auto entries = [&] {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(dir_))
+      if (e.path().filename() != "stdout" && e.path().filename() != "stderr") names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const std::string x_before = bytes_of("x.safetensors"), w_before = bytes_of("w.safetensors");
+  const std::vector<std::string> before = entries();
+  struct Case {
+    std::string output, role, input;
+  };
+  for (const Case& c : std::vector<Case>{{path("x.safetensors"), "input", path("x.safetensors")},
+                                         {dir_ + "/./w.safetensors", "weights", path("w.safetensors")},
+                                         {dir_ + "/nowhere/../x.safetensors", "input", path("x.safetensors")},
+                                         {path("link.safetensors"), "input", path("x.safetensors")}}) {
+    const std::string cmd = std::string(NNRUN_PATH) + " --model convnext --weights " + path("w.safetensors") +
+                            " --input " + path("x.safetensors") + " --output " + c.output + " >" + path("stdout") +
+                            " 2>" + path("stderr");
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1);
+    EXPECT_EQ(bytes_of("stderr"), "nnrun: output " + c.output + " would overwrite the " + c.role + " " + c.input + "\n");
+    EXPECT_EQ(bytes_of("x.safetensors"), x_before);
+    EXPECT_EQ(bytes_of("w.safetensors"), w_before);
+    EXPECT_EQ(entries(), before) << c.output;
+  }
+  EXPECT_TRUE(std::filesystem::is_symlink(path("link.safetensors")));
 }

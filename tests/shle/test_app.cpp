@@ -8,10 +8,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "apps/common/image_io.h"
+#include "tests/child_process.h"
 #include "tests/shle/test_util.h"
+#include "weights/safetensors.h"
 #include "weights/json.h"
 
 namespace {
@@ -342,4 +345,98 @@ TEST(SynthApp, NonFiniteRangeIsAUsageError) {
     EXPECT_NE(r.err.find("--range LO,HI needs finite numbers with LO <= HI"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "x.st")) << range;
   }
+}
+
+// Issue 12 item 5, finding 6: --calib OUT/summary.json --out-dir OUT would replace the
+// calibration with the summary; refused in one line before anything is written.
+TEST(ShleApp, CalibrationInTheOutputFolderIsNotOverwritten) {
+  TempDir dir;
+  const std::string out = dir / "o";
+  fs::create_directories(out);
+  fs::copy_file(sequence() + "/calib.json", out + "/summary.json");
+  const std::string before = slurp(out + "/summary.json");
+  Result r = run(std::string(SHLE_APP) + " --sequence '" + sequence() + "' --calib '" + out + "/summary.json' --out-dir '" +
+                     out + "' --quiet",
+                 dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err, "shle: output " + out + "/summary.json would overwrite the calibration " + out + "/summary.json\n");
+  EXPECT_EQ(slurp(out + "/summary.json"), before);
+  EXPECT_FALSE(fs::exists(out + "/frames.csv"));
+  EXPECT_FALSE(fs::exists(out + "/heights.png"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(out), {}), 1);
+}
+
+// Issue 12 item 5, finding 7: shle interrupted (SIGINT as soon as a temporary appears
+// in OUT) leaves the previous run's three files or the new run's three, never a mix,
+// and no temporary. Consecutive runs differ (--gt-height and --extend-top alternate)
+// so every file of a new set differs from the old one. A run that finishes before the
+// signal must have replaced the whole set; it is tried again (a few times at most).
+TEST(ShleApp, InterruptedRunLeavesOneRunsSet) {
+  TempDir dir;
+  const std::string out = dir / "o";
+  const std::vector<std::string> files = {out + "/frames.csv", out + "/summary.json", out + "/heights.png"};
+  auto args = [&](int k) {
+    std::vector<std::string> a = {SHLE_APP, "--sequence", sequence(), "--calib", sequence() + "/calib.json",
+                                  "--out-dir", out, "--quiet", "--extend-top", k % 2 ? "5" : "20"};
+    if (k % 2) a.insert(a.end(), {"--gt-height", "3.3"});
+    return a;
+  };
+  pid_t first = testproc::spawn(args(0));
+  ASSERT_GT(first, 0);
+  int status = testproc::wait_for(first, 300);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  bool interrupted = false;
+  for (int k = 1; k <= 6 && !interrupted; ++k) {
+    std::vector<std::string> old;
+    for (const std::string& f : files) old.push_back(slurp(f));
+    pid_t pid = testproc::spawn(args(k));
+    ASSERT_GT(pid, 0);
+    if (testproc::poll_until(pid, [&] { return !testproc::temporaries_under(out).empty(); }, 300)) ::kill(pid, SIGINT);
+    status = testproc::wait_for(pid, 300);
+    ASSERT_NE(status, -1) << "shle did not end";
+    interrupted = WIFSIGNALED(status) && WTERMSIG(status) == SIGINT;
+    EXPECT_EQ(testproc::temporaries_under(out), std::vector<std::string>{});
+    int unchanged = 0;
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      ASSERT_TRUE(fs::exists(files[i])) << files[i];
+      unchanged += slurp(files[i]) == old[i];
+    }
+    EXPECT_TRUE(unchanged == 0 || unchanged == 3) << unchanged << " of 3 files are the previous run's";
+    if (!interrupted) {
+      EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+      EXPECT_EQ(unchanged, 0);
+    }
+  }
+  if (!interrupted) std::cout << "note: shle finished before SIGINT in every attempt\n";
+}
+
+// Issue 12 item 5, finding 7: SIGINT while synth writes its 111 MB of weights leaves
+// the previous file (here a marker) or the complete new one, never a temporary. The
+// signal goes out when the temporary appears; should synth finish first, the file must
+// be whole, and it is tried again.
+TEST(ShleApp, InterruptedSynthLeavesNoTemporary) {
+  TempDir dir;
+  const std::string w = dir / "w.safetensors";
+  bool interrupted = false;
+  for (int attempt = 0; attempt < 3 && !interrupted; ++attempt) {
+    shletest::write_text(w, "previous");
+    pid_t pid = testproc::spawn({SYNTH_APP, "--model", "convnext_tiny", "--out", w});
+    ASSERT_GT(pid, 0);
+    if (testproc::poll_until(pid, [&] { return !testproc::temporaries_under(dir.path()).empty(); }, 300))
+      ::kill(pid, SIGINT);
+    const int status = testproc::wait_for(pid, 300);
+    ASSERT_NE(status, -1) << "synth did not end";
+    interrupted = WIFSIGNALED(status) && WTERMSIG(status) == SIGINT;
+    EXPECT_EQ(testproc::temporaries_under(dir.path()), std::vector<std::string>{});
+    const std::string now = slurp(w);
+    if (now != "previous") {
+      EXPECT_GT(now.size(), 100u << 20);
+      weights::SafeTensors st = weights::SafeTensors::load(w);  // complete and valid
+      EXPECT_TRUE(st.has("features.0.0.weight"));
+    }
+    if (!interrupted) {
+      EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+    }
+  }
+  if (!interrupted) std::cout << "note: synth finished before SIGINT in every attempt\n";
 }

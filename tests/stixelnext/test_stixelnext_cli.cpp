@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <string>
 
@@ -14,6 +16,7 @@
 #include "nn/models/stixel_head.h"
 #include "nn/models/synthetic_weights.h"
 #include "stixel/stx1.h"
+#include "tests/child_process.h"
 
 namespace {
 
@@ -178,4 +181,87 @@ TEST_F(StixelnextCli, OutDirCreatesAllLevelsOrSaysWhy) {
   EXPECT_EQ(run("--weights " + path("w.safetensors") + " --out-dir " + path("plain_file/sub") + " " + path("img.png")),
             1);
   expect_error_line("plain_file/sub: cannot create the output folder (");
+}
+
+// Issue 12 item 5, finding 6: outputs that would replace an input or each other are
+// refused before anything is written: one line, exit 1, the inputs' bytes unchanged,
+// no new file (not even the output folder).
+TEST_F(StixelnextCli, OutputThatIsAnInputIsRefused) {
+  // OUT/frame.stx1 given as an input of a run writing OUT/frame.stx1.
+  std::filesystem::create_directories(path("out"));
+  write_text("out/frame.stx1", "a previous result");
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " " + path("out/frame.stx1")), 1);
+  EXPECT_EQ(err_, "stixelnext: output " + path("out") + "/frame.stx1 would overwrite the input " +
+                      path("out/frame.stx1") + "\n");
+  EXPECT_EQ(slurp(path("out/frame.stx1")), "a previous result");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(path("out")), {}), 1);
+}
+
+TEST_F(StixelnextCli, TwoImagesWithOneNameAreRefused) {
+  std::filesystem::create_directories(path("a"));
+  std::filesystem::create_directories(path("b"));
+  std::filesystem::copy_file(path("img.png"), path("a/same.png"));
+  std::filesystem::copy_file(path("img.png"), path("b/same.png"));
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " " + path("a/same.png") + " " + path("b/same.png")), 1);
+  EXPECT_EQ(err_, "stixelnext: two outputs of this run are both " + path("out") + "/same.stx1 (from " +
+                      path("a/same.png") + " and " + path("b/same.png") + ")\n");
+  EXPECT_FALSE(std::filesystem::exists(path("out")));
+}
+
+TEST_F(StixelnextCli, OverlayNameOfAnotherInputIsRefused) {
+  // x.png beside x_overlay.png, written into their own folder: x's overlay would be
+  // the input x_overlay.png.
+  std::filesystem::copy_file(path("img.png"), path("x.png"));
+  std::filesystem::copy_file(path("img.png"), path("x_overlay.png"));
+  const std::string before = slurp(path("x_overlay.png"));
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --overlay --out-dir " + dir_ + " " + path("x.png") + " " +
+                path("x_overlay.png")), 1);
+  EXPECT_EQ(err_, "stixelnext: output " + dir_ + "/x_overlay.png would overwrite the input " + path("x_overlay.png") +
+                      "\n");
+  EXPECT_EQ(slurp(path("x_overlay.png")), before);
+  EXPECT_FALSE(exists("x.stx1"));
+  EXPECT_FALSE(exists("x_overlay.stx1"));
+  EXPECT_FALSE(exists("x_overlay_overlay.png"));
+}
+
+// Issue 12 item 5, finding 7: SIGINT in the middle of a many-image run leaves every
+// image's outputs (.stx1, overlay, BEV) whole or absent, and no temporary file. The
+// signal goes out once the first image's .stx1 is there, so it lands while later
+// images are computed or written; whenever it lands, the invariant must hold.
+TEST_F(StixelnextCli, InterruptedRunLeavesWholeSetsPerImage) {
+  const int kImages = 12;
+  std::vector<std::string> argv = {STIXELNEXT_PATH, "--quiet", "--threads", "1", "--weights", path("w.safetensors"),
+                                   "--calib", path("cam.json"), "--overlay", "--bev", "--out-dir", path("out")};
+  for (int i = 0; i < kImages; ++i) {
+    std::filesystem::copy_file(path("img.png"), path("i" + std::to_string(i) + ".png"));
+    argv.push_back(path("i" + std::to_string(i) + ".png"));
+  }
+  bool interrupted = false;
+  for (int attempt = 0; attempt < 3 && !interrupted; ++attempt) {
+    std::filesystem::remove_all(path("out"));
+    pid_t pid = testproc::spawn(argv);
+    ASSERT_GT(pid, 0);
+    const bool started = testproc::poll_until(pid, [&] { return exists("out/i0.stx1"); }, 120);
+    if (started) ::kill(pid, SIGINT);
+    const int status = testproc::wait_for(pid, 120);
+    ASSERT_NE(status, -1) << "stixelnext did not end";
+    interrupted = WIFSIGNALED(status) && WTERMSIG(status) == SIGINT;
+    if (!interrupted) {
+      ASSERT_TRUE(WIFEXITED(status)) << status;
+      EXPECT_EQ(WEXITSTATUS(status), 0);
+    }
+    EXPECT_EQ(testproc::temporaries_under(path("out")), std::vector<std::string>{});
+    int whole = 0;
+    for (int i = 0; i < kImages; ++i) {
+      const std::string base = "out/i" + std::to_string(i);
+      const int present = exists(base + ".stx1") + exists(base + "_overlay.png") + exists(base + "_bev.png");
+      EXPECT_TRUE(present == 0 || present == 3) << base << ": " << present << " of 3 outputs";
+      whole += present == 3;
+    }
+    EXPECT_GE(whole, 1);
+    if (!interrupted) {
+      EXPECT_EQ(whole, kImages);  // finished before the signal: all there
+    }
+  }
+  if (!interrupted) std::cout << "note: stixelnext finished before SIGINT in every attempt\n";
 }

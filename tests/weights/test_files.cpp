@@ -100,6 +100,48 @@ TEST_F(Files, WriteOverADirectoryFailsAndCleansUp) {
   EXPECT_TRUE(fs::is_directory(target / "keep"));
 }
 
+// The hooks (issue 12 item 5): `creating` names the temporary before it exists,
+// `released` after the rename, or after a failed write removed it; every name
+// released was announced. write_temporary_file leaves the temporary to the caller.
+TEST_F(Files, TemporaryFileHooksBracketTheTemporary) {
+  std::vector<std::string> created, released;
+  weights::TemporaryFileHooks hooks;
+  hooks.creating = [&](const std::string& t) {
+    EXPECT_FALSE(fs::exists(t)) << t;
+    created.push_back(t);
+  };
+  hooks.released = [&](const std::string& t) {
+    EXPECT_FALSE(fs::exists(t)) << t;
+    released.push_back(t);
+  };
+  const std::string path = (dir_ / "w.safetensors").string();
+  sample_writer(1.0f).write(path, &hooks);
+  ASSERT_EQ(created.size(), 1u);
+  EXPECT_EQ(created, released);
+  EXPECT_EQ(created[0].rfind(path + ".tmp-", 0), 0u) << created[0];
+  EXPECT_EQ(listing(), std::vector<std::string>{"w.safetensors"});
+
+  // A failed rename (the target is a folder): removed, then released.
+  created.clear();
+  released.clear();
+  fs::create_directories(dir_ / "occupied" / "keep");
+  EXPECT_NE(error_of([&] { sample_writer(1.0f).write((dir_ / "occupied").string(), &hooks); }), "");
+  EXPECT_EQ(created.size(), 1u);
+  EXPECT_EQ(created, released);
+
+  // The temporary alone: there, complete, and not yet released.
+  created.clear();
+  released.clear();
+  const char bytes[] = "abc";
+  std::string tmp;
+  ASSERT_EQ(weights::write_temporary_file((dir_ / "t.bin").string(), {{bytes, 3}}, &tmp, &hooks), "");
+  EXPECT_EQ(created, std::vector<std::string>{tmp});
+  EXPECT_TRUE(released.empty());
+  EXPECT_EQ(fs::file_size(tmp), 3u);
+  EXPECT_FALSE(fs::exists(dir_ / "t.bin"));
+  fs::remove(tmp);
+}
+
 TEST_F(Files, LoadMissingFileNamesThePath) {
   const std::string path = (dir_ / "absent.safetensors").string();
   std::string msg = error_of([&] { weights::SafeTensors::load(path); });
