@@ -1,4 +1,4 @@
-// Image decoding for the SHLE pipeline (stb via apps/common/image_io): the left
+// Image decoding for the SHLE pipeline (libpng/libjpeg via apps/common/image_io): the left
 // images as RGB, their size from the PNG header, and 16-bit PNG disparity.
 #pragma once
 
