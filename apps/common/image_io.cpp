@@ -43,22 +43,21 @@ constexpr int kMaxJpegScans = 500;
 // 4-5x faster than stb's level 8 with per-row filter choice did (docs/PERFORMANCE.md).
 constexpr int kPngLevel = 1;
 
+// Library messages and file names end up in our one-line errors: no control characters.
+std::string one_line(const std::string& s) {
+  std::string out;
+  for (char ch : s) {
+    unsigned char c = static_cast<unsigned char>(ch);
+    out += (c < 32 || c == 127) ? '?' : ch;
+  }
+  return out;
+}
+
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
-  throw Error(path + ": " + problem);
+  throw Error(one_line(path + ": " + problem));
 }
 
 std::string errno_text(int err) { return std::strerror(err); }
-
-// Library messages end up in our one-line errors: no control characters.
-std::string one_line(const char* s) {
-  std::string out;
-  for (; *s; ++s) {
-    unsigned char c = static_cast<unsigned char>(*s);
-    out += (c < 32 || c == 127) ? ' ' : char(c);
-  }
-  while (!out.empty() && out.back() == ' ') out.pop_back();
-  return out;
-}
 
 // Opens a regular file without blocking: O_NONBLOCK makes open() of a FIFO return at
 // once instead of waiting for a writer; fstat then refuses anything but a regular file,

@@ -723,3 +723,24 @@ TEST(ImageIo, MemoryDecodeMatchesLoad) {
   Bytes enc = imageio::encode_png(big.data(), 1920, 1280, 3);
   EXPECT_EQ(imageio::decode(enc.data(), enc.size(), "big", 3, false, {}).u8, big);
 }
+
+TEST(ImageIo, MessagesStayOneLineEvenForHostileFileNames) {
+  std::string dir = test_dir();
+  std::string name = dir + "/a\nb\x1b[31m.png";
+  write_raw(name, Bytes{'x', 'y'});
+  for (int which = 0; which < 2; ++which) {
+    try {
+      if (which == 0)
+        imageio::load(name);
+      else
+        imageio::load(dir + "/missing\r\n.png");
+      ADD_FAILURE() << "no error";
+    } catch (const imageio::Error& e) {
+      std::string msg = e.what();
+      for (char ch : msg) EXPECT_FALSE(static_cast<unsigned char>(ch) < 32 || ch == 127) << msg;
+      EXPECT_NE(msg.find(which == 0 ? "a?b?[31m.png: unsupported image format" : "missing??.png: cannot open"),
+                std::string::npos)
+          << msg;
+    }
+  }
+}
