@@ -4,7 +4,7 @@
 #   lib/cmake/roadnn/                   roadnnConfig.cmake, roadnnConfigVersion.cmake,
 #                                       roadnnTargets*.cmake (imported target roadnn::roadnn)
 #   lib/pkgconfig/roadnn.pc
-# Nothing installed needs Eigen or stb.
+# Nothing installed needs Eigen, libpng or libjpeg.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 

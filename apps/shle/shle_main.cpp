@@ -55,7 +55,7 @@ std::vector<int> parse_labels(const std::string& text) {
 int main(int argc, char** argv) {
   apps::apply_exec_environment("shle");
   std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
-  std::string tracker = "ncc", out_dir = "shle_out";
+  std::string tracker = "ncc", out_dir = "shle_out", max_pixels;
   std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels;
   double det_score = 0.3;
   int threads = 0;
@@ -113,6 +113,8 @@ int main(int argc, char** argv) {
   p.option("q", "VAR", "Kalman process noise (default 1e-3)", &opt.temporal.kalman.q);
   p.option("r", "VAR", "Kalman measurement noise (default 1e-2)", &opt.temporal.kalman.r);
   p.option("p0", "VAR", "Kalman initial variance (default 6)", &opt.temporal.kalman.p0);
+  p.option("max-pixels", "N", "refuse images above N megapixels (1 Mpx = 2^20 pixels) from their header, before decoding (default 64)",
+           &max_pixels);
   p.flag("quiet", "no progress bar and no per-frame warnings", &quiet);
   p.required("sequence");
   p.required("calib");
@@ -124,6 +126,9 @@ int main(int argc, char** argv) {
       "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --boxes detector \\\n"
       "       --detector-weights det.safetensors --detector-model fasterrcnn_mobilenet_v3_large_320_fpn");
   p.parse(argc, argv);
+  imageio::DecodeLimits limits;
+  if (p.given("max-pixels") && !imageio::parse_max_pixels(max_pixels, &limits.max_pixels))
+    p.fail("--max-pixels takes megapixels > 0, e.g. 64 or 0.5");
 
   opt.temporal.use_kalman = !no_kalman;
   opt.temporal.kalman_compat = compat;
@@ -234,7 +239,7 @@ int main(int argc, char** argv) {
     }
 
     std::filesystem::create_directories(out_dir);
-    shleapp::PngFrameLoader loader;
+    shleapp::PngFrameLoader loader(limits);
     bool bar = !quiet && isatty(2);
     shle::SequenceRun run = shle::run_sequence(seq, cal, *source, loader, opt,
                                                bar ? shle::Progress(progress_bar) : shle::Progress());

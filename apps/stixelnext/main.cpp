@@ -89,7 +89,7 @@ bool parse_size(const std::string& text, int* h, int* w) {
 int main(int argc, char** argv) {
   apps::apply_exec_environment("stixelnext");
   std::string weights_path, calib_path, out_dir = "stixels", format = "stx1", head, anchors, norm, input_size,
-                                        cluster_axes = "0,2", precision;
+                                        cluster_axes = "0,2", precision, max_pixels;
   double threshold = 0.36, train_focal = 0;
   int threads = 0, columns = 0, stixel_width = 0;
   bool overlay = false, bev = false, cluster = false, profile = false, embed_image = false, quiet = false;
@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
   args.option("stixel-width", "PX", "pixels per column (default 8)", &stixel_width);
   args.option("train-focal", "F", "focal length (px) of the training camera: depths are scaled by f_camera / F", &train_focal);
   args.flag("embed-image", "embed the (network-size) image as PNG in the .stx1, as pyStixel-lib's tools do", &embed_image);
+  args.option("max-pixels", "N", "refuse images above N megapixels (1 Mpx = 2^20 pixels) from their header, before decoding (default 64)", &max_pixels);
   args.flag("quiet", "no progress line", &quiet);
   args.positionals("IMAGE...", "PNG or JPEG images", &images);
   args.required("weights");
@@ -127,6 +128,9 @@ int main(int argc, char** argv) {
               "and K is scaled to match.\n\nexample:\n  stixelnext --weights stixelnext.safetensors --calib cam.json "
               "--overlay --bev --cluster --out-dir out frame_*.png");
   args.parse(argc, argv);
+  imageio::DecodeLimits limits;
+  if (args.given("max-pixels") && !imageio::parse_max_pixels(max_pixels, &limits.max_pixels))
+    args.fail("--max-pixels takes megapixels > 0, e.g. 64 or 0.5");
   if (images.empty()) args.fail("no IMAGE given");
   if (!(threshold >= 0 && threshold <= 1)) args.fail("--threshold must be in [0, 1]");
   if (format != "stx1" && format != "csv" && format != "json") args.fail("--format must be stx1, csv or json");
@@ -226,7 +230,7 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < images.size(); ++i) {
     const std::string& path = images[i];
     try {
-      imageio::Image img = timer.time(kDecode, [&] { return imageio::load(path, 3); });
+      imageio::Image img = timer.time(kDecode, [&] { return imageio::load(path, 3, false, limits); });
       if (!calib_path.empty() && (img.width != calib.width || img.height != calib.height))
         throw std::runtime_error(path + ": image is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
                                  " but the calibration " + calib_path + " is for " + std::to_string(calib.width) + "x" +

@@ -129,6 +129,10 @@ TEST(ShleApp, UsageAndInputErrors) {
   Result r = run(app + " --help", dir);
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("--kalman-compat"), std::string::npos);
+  EXPECT_NE(r.out.find("--max-pixels"), std::string::npos);
+  r = run(app + " --sequence '" + seq + "' --calib x --max-pixels=-3", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--max-pixels takes megapixels > 0"), std::string::npos) << r.err;
   r = run(app + " --sequence '" + seq + "'", dir);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--calib is required"), std::string::npos);

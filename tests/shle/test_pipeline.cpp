@@ -269,3 +269,38 @@ TEST(Pipeline, BadOptionsThrow) {
 }
 
 }  // namespace
+
+TEST(Pipeline, FrameLoaderReadsSizesFromHeadersAndHoldsTheLimit) {
+  TempDir dir;
+  std::vector<std::uint8_t> rgb(64 * 48 * 3, 90);
+  imageio::save_png((dir / "left.png"), rgb.data(), 64, 48, 3);
+  // encode_png writes 8-bit files only: what the disparity check must refuse from the header.
+  shleapp::PngFrameLoader loader;
+  int w = 0, h = 0;
+  ASSERT_TRUE(loader.image_size((dir / "left.png"), &w, &h));
+  EXPECT_EQ(w, 64);
+  EXPECT_EQ(h, 48);
+  EXPECT_FALSE(loader.image_size((dir / "missing.png"), &w, &h));
+  EXPECT_EQ(loader.load_image((dir / "left.png")).rgb, rgb);
+  try {
+    loader.load_png_disparity((dir / "left.png"), 256);
+    ADD_FAILURE() << "an 8-bit RGB PNG was accepted as disparity";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("disparity PNG must be 16-bit single-channel, got 8-bit with 3 channel(s)"),
+              std::string::npos)
+        << e.what();
+  }
+
+  imageio::DecodeLimits small;
+  small.max_pixels = 1000;
+  shleapp::PngFrameLoader limited(small);
+  ASSERT_TRUE(limited.image_size((dir / "left.png"), &w, &h));  // the header only: no limit
+  EXPECT_EQ(w, 64);
+  try {
+    limited.load_image((dir / "left.png"));
+    ADD_FAILURE() << "no limit error";
+  } catch (const imageio::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("left.png: image is 64x48 (0.00293 Mpx), above the limit"), std::string::npos)
+        << e.what();
+  }
+}

@@ -111,6 +111,19 @@ TEST_F(StixelnextCli, TruncatedImageFailsWithoutOutput) {
   EXPECT_FALSE(exists("out/cut.stx1"));
 }
 
+TEST_F(StixelnextCli, MaxPixelsRefusesLargerImagesFromTheHeader) {
+  // img.png is 96x64 = 6144 pixels; 0.001 Mpx is 1049 pixels.
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --max-pixels 0.001 " + path("img.png")), 1);
+  expect_error_line(path("img.png") + ": image is 96x64 (0.00586 Mpx), above the limit of 0.001 Mpx (raise it with --max-pixels)");
+  EXPECT_FALSE(exists("out/img.stx1"));
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --max-pixels 0.006 " + path("img.png")), 0) << err_;
+  EXPECT_TRUE(exists("out/img.stx1"));
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --max-pixels 0 " + path("img.png")), 2);
+  EXPECT_NE(err_.find("--max-pixels takes megapixels > 0"), std::string::npos) << err_;
+  EXPECT_EQ(run("--help"), 0);
+  EXPECT_NE(slurp(path("stdout")).find("--max-pixels"), std::string::npos);
+}
+
 TEST_F(StixelnextCli, UnreadableImageFailsButOthersAreProcessed) {
   EXPECT_EQ(run("--weights " + path("w.safetensors") + " " + path("missing.png") + " " + path("img.png")), 1);
   EXPECT_NE(err_.find(path("missing.png")), std::string::npos) << err_;
