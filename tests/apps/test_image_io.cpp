@@ -3,6 +3,8 @@
 #include "apps/common/image_io.h"
 
 #include <gtest/gtest.h>
+
+#include "tests/apps/test_dir.h"
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <fcntl.h>
@@ -25,15 +27,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 namespace {
 
-// A fresh folder per test, so ctest may run the cases in parallel.
-std::string test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  fs::path dir = fs::path(ROADNN_BINARY_DIR) / "test_tmp" / "apps" /
-                 (std::string(info->test_suite_name()) + "." + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
+using appstest::test_dir;
 
 void write_raw(const std::string& path, const Bytes& b) {
   std::ofstream f(path, std::ios::binary);

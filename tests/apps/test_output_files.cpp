@@ -4,6 +4,8 @@
 #include "apps/common/output_files.h"
 
 #include <gtest/gtest.h>
+
+#include "tests/apps/test_dir.h"
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -23,14 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using Bytes = std::vector<std::uint8_t>;
 
-std::string test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  fs::path dir = fs::path(ROADNN_BINARY_DIR) / "test_tmp" / "apps" /
-                 (std::string(info->test_suite_name()) + "." + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
+using appstest::test_dir;
 
 void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
