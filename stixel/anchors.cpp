@@ -104,7 +104,7 @@ Anchors parse_anchor_spec(const std::string& spec, const std::string& source) {
   }
   if (v[2] != std::floor(v[2]) || !(v[2] >= 2) || v[2] > kMaxAnchors)
     throw Error(where + ": anchor count must be an integer in [2, " + std::to_string(kMaxAnchors) +
-                "] in '" + spec + "'");
+                "] in " + weights::quote_name(spec));
   try {
     return kind == "tangent" ? tangent_anchors(v[0], v[1], static_cast<int>(v[2]))
                              : linear_anchors(v[0], v[1], static_cast<int>(v[2]));
