@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <set>
 #include <system_error>
@@ -16,6 +17,17 @@
 #include "weights/tensor_spec.h"
 
 namespace roadnn_api {
+
+// A C caller may store any int in an enum field of roadnn_model_params, and in C++
+// loading a value outside the enum's range is undefined (UBSan -fsanitize=enum
+// reported it in tests/api), so the fields are read as ints and checked first.
+template <class E>
+int raw_enum(const E& e) {
+  static_assert(sizeof(E) == sizeof(int), "C enums are int-sized here");
+  int v;
+  std::memcpy(&v, &e, sizeof v);
+  return v;
+}
 
 bool is_detector(roadnn_model_kind kind) {
   return kind == ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_FPN ||
@@ -50,14 +62,14 @@ nn::detection::FasterRcnnVariant variant_of(roadnn_model_kind kind) {
 
 nn::ExecOptions exec_of(const roadnn_model_params& p) {
   nn::ExecOptions e;
-  switch (p.max_isa) {
+  switch (raw_enum(p.max_isa)) {
     case ROADNN_ISA_SCALAR: e.max_isa = nn::Isa::Scalar; break;
     case ROADNN_ISA_AVX2: e.max_isa = nn::Isa::Avx2; break;
     case ROADNN_ISA_AVX512:
     case ROADNN_ISA_BEST: e.max_isa = nn::Isa::Avx512; break;
     default:
       fail(ROADNN_ERROR_INVALID_ARGUMENT,
-           "roadnn_model_params.max_isa " + std::to_string(static_cast<int>(p.max_isa)) + " is not a roadnn_isa");
+           "roadnn_model_params.max_isa " + std::to_string(raw_enum(p.max_isa)) + " is not a roadnn_isa");
   }
   e.max_isa = nn::min_isa(e.max_isa, nn::detect_isa());
   if (p.winograd != 0 && p.winograd != 1)
@@ -68,8 +80,9 @@ nn::ExecOptions exec_of(const roadnn_model_params& p) {
 }
 
 nn::Precision precision_of(const roadnn_model_params& p) {
-  if (p.precision == ROADNN_PRECISION_F32) return nn::Precision::F32;
-  if (p.precision != ROADNN_PRECISION_BF16)
+  const int precision = raw_enum(p.precision);
+  if (precision == ROADNN_PRECISION_F32) return nn::Precision::F32;
+  if (precision != ROADNN_PRECISION_BF16)
     fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.precision must be F32 or BF16");
   if (p.kind != ROADNN_MODEL_CONVNEXT && p.kind != ROADNN_MODEL_STIXELNEXT)
     fail(ROADNN_ERROR_INVALID_ARGUMENT, std::string("precision bf16 applies to ConvNeXt and StixelNExT++ only, not ") +
@@ -132,9 +145,13 @@ std::size_t tensor_bytes(const weights::SafeTensors& st, const std::vector<weigh
 }
 
 std::unique_ptr<roadnn_model> load(const weights::SafeTensors& st, const roadnn_model_params& p) {
-  if (!is_known_kind(p.kind))
+  const int kind = raw_enum(p.kind);
+  if (kind != ROADNN_MODEL_CONVNEXT && kind != ROADNN_MODEL_STIXELNEXT &&
+      kind != ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_FPN &&
+      kind != ROADNN_MODEL_FASTERRCNN_MOBILENET_V3_LARGE_320_FPN && kind != ROADNN_MODEL_FASTERRCNN_RESNET50_FPN)
     fail(ROADNN_ERROR_INVALID_ARGUMENT,
-         "roadnn_model_params.kind " + std::to_string(static_cast<int>(p.kind)) + " is not a roadnn_model_kind");
+         "roadnn_model_params.kind " + std::to_string(kind) + " is not a roadnn_model_kind");
+  // From here on p.kind is a valid roadnn_model_kind.
   if (!(p.box_score_thresh < 0 || (p.box_score_thresh >= 0 && p.box_score_thresh <= 1)))
     fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.box_score_thresh must be < 0 (default) or in [0, 1]");
   auto m = std::make_unique<roadnn_model>();

@@ -137,8 +137,14 @@ Calibration load_smartereye_calibration(const std::string& path) {
     throw Error(dir.string() + ": no " + want + " (SmarterEye calibration needs calibData.json and DepthCalib.json)");
   };
   std::string calib_path = find("calibData.json"), depth_path = find("DepthCalib.json");
-  auto data = [](const std::string& p, std::size_t need) {
-    json::Value root = parse_json_file(p);
+  json::Value calib_data = parse_json_file(calib_path);
+  json::Value depth_calib = parse_json_file(depth_path);
+  return parse_smartereye_calibration(calib_data, calib_path, depth_calib, depth_path);
+}
+
+Calibration parse_smartereye_calibration(const json::Value& calib_data, const std::string& calib_source,
+                                         const json::Value& depth_calib, const std::string& depth_source) {
+  auto data = [](const json::Value& root, const std::string& p, std::size_t need) {
     const json::Value* d = root.is_object() ? root.get("data") : nullptr;
     if (!d || !d->is_array()) throw Error(p + ": expected an object with a \"data\" array");
     if (d->array().size() < need)
@@ -151,16 +157,16 @@ Calibration load_smartereye_calibration(const std::string& path) {
     }
     return out;
   };
-  std::vector<double> cd = data(calib_path, 43), dc = data(depth_path, 5);
+  std::vector<double> cd = data(calib_data, calib_source, 43), dc = data(depth_calib, depth_source, 5);
   Calibration c;
   c.intrinsics.fx = cd[4];
   c.intrinsics.fy = cd[12];
   c.intrinsics.cy = (cd[40] + cd[42]) / 2.0;
   c.intrinsics.cx = (cd[39] + cd[41]) / 2.0 - std::floor(dc[4] + dc[0]);
   if (!(c.intrinsics.fx > 0) || !(c.intrinsics.fy > 0))
-    throw Error(calib_path + ": focal lengths data[4] and data[12] must be > 0");
+    throw Error(calib_source + ": focal lengths data[4] and data[12] must be > 0");
   if (!std::isfinite(c.intrinsics.cx) || !std::isfinite(c.intrinsics.cy))
-    throw Error(calib_path + ": the principal point (data[39..42] with DepthCalib data[0], data[4]) overflows to infinity");
+    throw Error(calib_source + ": the principal point (data[39..42] with DepthCalib data[0], data[4]) overflows to infinity");
   return c;
 }
 

@@ -47,5 +47,8 @@ Calibration load_calibration(const std::string& path);
 // cx = (calib[39] + calib[41]) / 2 - floor(depth[4] + depth[0]). bf, mount height,
 // disparity scale and size are the released constants (240, 1.45, 32, 1280x720).
 Calibration load_smartereye_calibration(const std::string& path);
+// The same from the two parsed files; the sources name them in errors.
+Calibration parse_smartereye_calibration(const json::Value& calib_data, const std::string& calib_source,
+                                         const json::Value& depth_calib, const std::string& depth_source);
 
 }  // namespace shle

@@ -1,5 +1,7 @@
 #include "shle/disparity_io.h"
 
+#include "weights/quote_name.h"
+
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -85,7 +87,7 @@ DisparityMap parse_pfm(const std::uint8_t* bytes, std::size_t size, const std::s
   auto integer = [&](const char* what) {
     std::string t = token(what);
     for (char c : t)
-      if (c < '0' || c > '9') throw Error(source + ": PFM " + std::string(what) + " '" + t + "' is not a positive integer");
+      if (c < '0' || c > '9') throw Error(source + ": PFM " + std::string(what) + " " + weights::quote_name(t) + " is not a positive integer");
     if (t.size() > 6) throw Error(source + ": PFM " + std::string(what) + " " + t + " is too large");
     return std::stoi(t);
   };
@@ -96,7 +98,7 @@ DisparityMap parse_pfm(const std::uint8_t* bytes, std::size_t size, const std::s
   char* end = nullptr;
   double scale = std::strtod(scale_text.c_str(), &end);
   if (end != scale_text.c_str() + scale_text.size() || !std::isfinite(scale) || scale == 0.0)
-    throw Error(source + ": PFM scale '" + scale_text + "' is not a non-zero number");
+    throw Error(source + ": PFM scale " + weights::quote_name(scale_text) + " is not a non-zero number");
   // Exactly one whitespace byte separates the header from the data.
   if (pos >= size || !is_space(bytes[pos])) throw Error(source + ": truncated PFM header");
   ++pos;

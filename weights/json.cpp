@@ -105,12 +105,23 @@ std::string describe_char(unsigned char c) {
 
 // A key shortened for messages; quote() escapes control characters, so the
 // message stays on one line.
+// DEL (0x7F), which JSON strings may hold raw and quote() passes through, is written
+// \u007f here (found by tests/fuzz/fuzz_smartereye: a duplicate key holding DEL).
 std::string describe_key(const std::string& key) {
   constexpr std::size_t kMax = 80;
-  if (key.size() <= kMax) return quote(key);
-  std::size_t cut = kMax;
-  while (cut > 0 && is_continuation(static_cast<unsigned char>(key[cut]))) --cut;
-  return quote(key.substr(0, cut)) + "...";
+  std::size_t cut = key.size();
+  if (cut > kMax) {
+    cut = kMax;
+    while (cut > 0 && is_continuation(static_cast<unsigned char>(key[cut]))) --cut;
+  }
+  std::string q = quote(key.substr(0, cut)), out;
+  for (char ch : q) {
+    if (ch == '\x7f')
+      out += "\\u007f";
+    else
+      out += ch;
+  }
+  return cut < key.size() ? out + "..." : out;
 }
 
 class Parser {

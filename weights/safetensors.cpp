@@ -159,8 +159,14 @@ std::string shape_str(const std::vector<std::int64_t>& shape) {
 }
 
 std::int64_t TensorInfo::numel() const {
+  // A zero anywhere makes the product zero, even when the other dimensions multiply
+  // past int64 (a valid empty tensor): check before multiplying, which would overflow.
+  for (std::int64_t d : shape)
+    if (d == 0) return 0;
   std::int64_t n = 1;
-  for (std::int64_t d : shape) n *= d;
+  for (std::int64_t d : shape)
+    if (__builtin_mul_overflow(n, d, &n))
+      throw Error("tensor " + quote_name(name) + " of shape " + shape_str(shape) + " has more than 2^63 elements");
   return n;
 }
 

@@ -44,6 +44,10 @@ Calibration read_calibration(const std::string& path) {
   } catch (const json::Error& e) {
     throw std::runtime_error(e.what());
   }
+  return parse_calibration(doc, path);
+}
+
+Calibration parse_calibration(const json::Value& doc, const std::string& path) {
   if (!doc.is_object()) throw std::runtime_error(path + ": expected a JSON object with K, T, width, height");
   for (const auto& [key, value] : doc.object()) {
     (void)value;

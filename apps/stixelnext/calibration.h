@@ -7,6 +7,10 @@
 #include <string>
 #include <vector>
 
+namespace json {
+class Value;
+}
+
 namespace stixelnext {
 
 struct Calibration {
@@ -16,5 +20,7 @@ struct Calibration {
 
 // Throws std::runtime_error("path: problem") on a malformed file.
 Calibration read_calibration(const std::string& path);
+// The same on a parsed document; `source` names it in errors.
+Calibration parse_calibration(const json::Value& doc, const std::string& source);
 
 }  // namespace stixelnext

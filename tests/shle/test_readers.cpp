@@ -132,6 +132,20 @@ TEST(Pfm, Malformed) {
   check({}, "not a PFM file");
 }
 
+// Found by tests/fuzz/fuzz_disparity: header fields went into the message raw, so a
+// control byte in the width (minimized: "Pf\nu\x02 ...") or scale broke the one-line rule.
+TEST(Pfm, HeaderFieldsInMessagesAreEscaped) {
+  const std::vector<std::string> heads = {std::string("Pf\nu\x02 2\n-1\n"), "Pf\n2 \x1b[31m\n-1\n",
+                                          "Pf\n2 2\n-1\x7f\x01\n"};
+  for (const std::string& h : heads) {
+    std::vector<std::uint8_t> b(h.begin(), h.end());
+    b.resize(b.size() + 16, 0);
+    std::string m = testutil::error_of([&] { shle::parse_pfm(b.data(), b.size(), "x.pfm"); });
+    EXPECT_TRUE(testutil::is_one_printable_line(m)) << m;
+    EXPECT_NE(m.find("\\x"), std::string::npos) << m;
+  }
+}
+
 TEST(Png16, ScaledBySixteenBitScale) {
   std::vector<std::uint16_t> raw = {0, 32, 256, 65535};
   shle::DisparityMap m = shle::disparity_from_u16(raw.data(), 2, 2, 32.0, "d.png");

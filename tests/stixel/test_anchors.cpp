@@ -94,3 +94,12 @@ TEST(HostileMessages, AnchorSpecAndMetadataStayOnePrintableLine) {
     EXPECT_TRUE(testutil::is_one_printable_line(m, 400)) << key << ": " << m.substr(0, 200);
   }
 }
+
+// Found by tests/fuzz/fuzz_anchors: a bad count quoted the whole spec raw, so control
+// bytes in it (minimized: "tangent:5,5,\r...\r344444") broke the one-line message.
+TEST(Anchors, BadCountMessageEscapesTheSpec) {
+  std::string m = testutil::error_of(
+      [] { stixel::parse_anchor_spec("tangent:5,5,\r\r\r344444", "--anchors"); });
+  EXPECT_NE(m.find("anchor count must be an integer"), std::string::npos) << m;
+  EXPECT_TRUE(testutil::is_one_printable_line(m)) << m;
+}

@@ -292,3 +292,11 @@ TEST(JsonValue, StaysCompact) {
 }
 
 }  // namespace
+
+// Found by tests/fuzz/fuzz_smartereye: JSON strings may hold a raw DEL (0x7F), and a
+// duplicate key holding one went into the message unescaped.
+TEST(Json, DuplicateKeyWithDelIsEscapedInTheMessage) {
+  std::string m = parse_error("{\"p\x7fq\": 1, \"p\x7fq\": 2}");
+  EXPECT_NE(m.find("duplicate key \"p\\u007fq\""), std::string::npos) << m;
+  for (unsigned char c : m) EXPECT_TRUE(c >= 0x20 && c != 0x7f) << m;
+}

@@ -281,3 +281,14 @@ TEST(SafeTensors, NumelOfAnEmptyTensorWithHugeDimensionsIsZero) {
   t.shape = {3, 4};
   EXPECT_EQ(12, t.numel());
 }
+
+// Found by scripts/sanitize (UBSan): the test above overflowed int64 before reaching
+// the zero; a non-empty shape past int64 is an error, not undefined behaviour.
+TEST(SafeTensors, NumelPastInt64IsAnError) {
+  weights::TensorInfo t;
+  t.name = "big";
+  t.shape = {std::int64_t{1} << 32, std::int64_t{1} << 32};
+  EXPECT_THROW(t.numel(), weights::Error);
+  t.shape = {std::int64_t{1} << 31, std::int64_t{1} << 31};
+  EXPECT_EQ(std::int64_t{1} << 62, t.numel());
+}
