@@ -20,8 +20,9 @@ std::vector<float> numbers(const json::Value& doc, const char* key, std::size_t 
                              " values, expected " + std::to_string(count) + " (row-major)");
   std::vector<float> out;
   for (const auto& x : v->array()) {
-    if (!x.is_number() || !std::isfinite(x.number()))
-      throw std::runtime_error(path + ": \"" + key + "\" holds a value that is not a finite number");
+    // The camera model is float32: 1e300 is finite as a double but Inf as a float.
+    if (!x.is_number() || !std::isfinite(static_cast<float>(x.number())))
+      throw std::runtime_error(path + ": \"" + key + "\" holds a value that is not a finite float32 number");
     out.push_back(static_cast<float>(x.number()));
   }
   return out;

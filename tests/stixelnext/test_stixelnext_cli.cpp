@@ -155,6 +155,14 @@ TEST_F(StixelnextCli, SingularCalibration) {
   EXPECT_FALSE(exists("out/img.stx1"));
 }
 
+// Issue 12, row 10: finite as a double, Inf as the float32 the camera model uses.
+TEST_F(StixelnextCli, CalibrationValueBeyondFloatIsRefused) {
+  write_text("huge.json", R"({"K": [1e300, 0, 47.5, 0, 80, 31.5, 0, 0, 1], "width": 96, "height": 64})");
+  EXPECT_EQ(run("--weights " + path("w.safetensors") + " --calib " + path("huge.json") + " " + path("img.png")), 1);
+  expect_error_line("\"K\" holds a value that is not a finite float32 number");
+  EXPECT_FALSE(exists("out/img.stx1"));
+}
+
 TEST_F(StixelnextCli, ThresholdOutsideUnitInterval) {
   EXPECT_EQ(run("--weights " + path("w.safetensors") + " --threshold 1.5 " + path("img.png")), 2);
   EXPECT_NE(err_.find("--threshold"), std::string::npos) << err_;
