@@ -8,6 +8,7 @@
 #include "apps/shle/frame_loader.h"
 #include "apps/shle/synth_writer.h"
 #include "shle/pipeline.h"
+#include "tests/process_memory.h"
 #include "tests/shle/test_util.h"
 
 namespace {
@@ -269,6 +270,51 @@ TEST(Pipeline, BadOptionsThrow) {
 }
 
 }  // namespace
+
+// Issue 12, row 3: a 22000x22000 16-bit disparity PNG header used to be decoded
+// (2.8 GB) before its size was checked; now the header alone is refused.
+TEST(Pipeline, HugeDisparityPngIsRefusedFromItsHeader) {
+  TempDir dir;
+  auto crc32 = [](const std::uint8_t* p, std::size_t n) {
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (std::size_t i = 0; i < n; ++i) {
+      c ^= p[i];
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return c ^ 0xFFFFFFFFu;
+  };
+  auto be32 = [](std::vector<std::uint8_t>* v, std::uint32_t x) {
+    for (int s = 24; s >= 0; s -= 8) v->push_back(static_cast<std::uint8_t>(x >> s));
+  };
+  auto chunk = [&](std::vector<std::uint8_t>* v, const char* type, const std::vector<std::uint8_t>& data) {
+    be32(v, static_cast<std::uint32_t>(data.size()));
+    const std::size_t start = v->size();
+    v->insert(v->end(), type, type + 4);
+    v->insert(v->end(), data.begin(), data.end());
+    be32(v, crc32(v->data() + start, v->size() - start));
+  };
+  std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  std::vector<std::uint8_t> ihdr;
+  be32(&ihdr, 22000);
+  be32(&ihdr, 22000);
+  ihdr.insert(ihdr.end(), {16, 0, 0, 0, 0});  // 16-bit grey, deflate, no filter, no interlace
+  chunk(&png, "IHDR", ihdr);
+  chunk(&png, "IDAT", {0x78, 0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01});
+  chunk(&png, "IEND", {});
+  const std::string path = dir / "disp.png";
+  shletest::write_bytes(path, png);
+  const long before = testutil::peak_rss_kib();
+  shleapp::PngFrameLoader loader;
+  try {
+    loader.load_png_disparity(path, 256);
+    ADD_FAILURE() << "no limit error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("disp.png: image is 22000x22000 (462 Mpx), above the limit of 64 Mpx"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT((testutil::peak_rss_kib() - before) / 1024, 100) << "the refusal committed memory";
+}
 
 TEST(Pipeline, FrameLoaderReadsSizesFromHeadersAndHoldsTheLimit) {
   TempDir dir;
