@@ -268,6 +268,14 @@ roadnn_status roadnn_model_get_info(const roadnn_model* model, roadnn_model_info
     info.input_width = model->stixelnext ? model->stixel_settings.input_width : 0;
     info.columns = model->stixelnext ? model->stixel_settings.effective_columns() : 0;
     info.stixel_head = model->stixelnext ? nn::stixel_head_name(model->stixelnext->head().variant()) : "";
+    const nn::ConvNeXtConfig* backbone = model->convnext      ? &model->convnext->config()
+                                         : model->stixelnext ? &model->stixelnext->backbone().config()
+                                                             : nullptr;
+    for (int i = 0; i < 4; ++i) {
+      const bool has = backbone && i < static_cast<int>(backbone->dims.size());
+      info.stage_widths[i] = has ? backbone->dims[i] : 0;
+      info.stage_depths[i] = has ? backbone->depths[i] : 0;
+    }
     *out = info;
   });
 }

@@ -17,10 +17,7 @@ class ConvNeXtRunner : public Runner {
   ConvNeXtRunner(const std::string& name, const weights::SafeTensors& w, nn::Precision precision)
       : model_(w, "features.", precision) {
     const nn::ConvNeXtConfig& cfg = model_.config();
-    nn::ConvNeXtConfig want;
-    if (name == "convnext_tiny") want = nn::convnext_tiny_config();
-    if (name == "convnext_small") want = nn::convnext_small_config();
-    if (name == "convnext_base") want = nn::convnext_base_config();
+    const nn::ConvNeXtConfig want = named_convnext_config(name);
     if (!want.dims.empty() && !(cfg == want))
       throw weights::Error(w.source() + ": holds a ConvNeXt with " + cfg.describe() + ", not " +
                            name + " (" + want.describe() + "); use --model convnext for any configuration");
@@ -38,27 +35,9 @@ class ConvNeXtRunner : public Runner {
   }
 
   void prepare(const weights::SafeTensors& in) override {
-    if (!in.has("input")) throw weights::Error(in.source() + ": missing tensor 'input' [N,3,H,W]");
-    const auto& info = in.info("input");
-    if (info.shape.size() != 4)
-      throw weights::Error(in.source() + ": tensor 'input' has rank " +
-                           std::to_string(info.shape.size()) + ", expected 4 ([N,3,H,W])");
-    if (info.shape[1] != 3)
-      throw weights::Error(in.source() + ": tensor 'input' has " + std::to_string(info.shape[1]) +
-                           " channels, expected 3 ([N,3,H,W])");
-    for (auto d : info.shape)
-      if (d > 1000000) throw weights::Error(in.source() + ": tensor 'input' is implausibly large");
-    const int n = static_cast<int>(info.shape[0]), h = static_cast<int>(info.shape[2]),
-              w = static_cast<int>(info.shape[3]);
-    if (n < 1) throw weights::Error(in.source() + ": tensor 'input' has batch size 0");
-    if (h < 32 || w < 32)
-      throw weights::Error(in.source() + ": tensor 'input' is " + std::to_string(h) + "x" +
-                           std::to_string(w) + ", smaller than the minimum 32x32");
-    // NaN/Inf in the input would give an all-NaN output and exit 0: refused,
-    // naming the file and the first bad element.
-    weights::check_tensors(in, {{"input", in.info("input").shape}});
+    const ConvNeXtInput x = convnext_input(in);
     input_ = in.f32("input");
-    model_.plan(n, h, w);
+    model_.plan(x.n, x.h, x.w);
     out_.resize(model_.output_shape().count());
   }
 
@@ -72,7 +51,7 @@ class ConvNeXtRunner : public Runner {
     out.add_f32("features", {s.n, s.c, s.h, s.w}, out_.data());
   }
 
-  nn::Profiler& profiler() override { return model_.profiler(); }
+  nn::Profiler* profiler() override { return &model_.profiler(); }
 
  private:
   nn::ConvNeXt model_;
@@ -81,6 +60,36 @@ class ConvNeXtRunner : public Runner {
 };
 
 }  // namespace
+
+nn::ConvNeXtConfig named_convnext_config(const std::string& name) {
+  if (name == "convnext_tiny") return nn::convnext_tiny_config();
+  if (name == "convnext_small") return nn::convnext_small_config();
+  if (name == "convnext_base") return nn::convnext_base_config();
+  return {};
+}
+
+ConvNeXtInput convnext_input(const weights::SafeTensors& in) {
+  if (!in.has("input")) throw weights::Error(in.source() + ": missing tensor 'input' [N,3,H,W]");
+  const auto& info = in.info("input");
+  if (info.shape.size() != 4)
+    throw weights::Error(in.source() + ": tensor 'input' has rank " + std::to_string(info.shape.size()) +
+                         ", expected 4 ([N,3,H,W])");
+  if (info.shape[1] != 3)
+    throw weights::Error(in.source() + ": tensor 'input' has " + std::to_string(info.shape[1]) +
+                         " channels, expected 3 ([N,3,H,W])");
+  for (auto d : info.shape)
+    if (d > 1000000) throw weights::Error(in.source() + ": tensor 'input' is implausibly large");
+  const ConvNeXtInput x{static_cast<int>(info.shape[0]), static_cast<int>(info.shape[2]),
+                        static_cast<int>(info.shape[3])};
+  if (x.n < 1) throw weights::Error(in.source() + ": tensor 'input' has batch size 0");
+  if (x.h < 32 || x.w < 32)
+    throw weights::Error(in.source() + ": tensor 'input' is " + std::to_string(x.h) + "x" + std::to_string(x.w) +
+                         ", smaller than the minimum 32x32");
+  // NaN/Inf in the input would give an all-NaN output and exit 0: refused, naming
+  // the file and the first bad element.
+  weights::check_tensors(in, {{"input", info.shape}});
+  return x;
+}
 
 std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w,
                                       const RunOptions& options) {

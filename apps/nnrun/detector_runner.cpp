@@ -81,7 +81,7 @@ class DetectorRunner : public Runner {
     out.add_i64("proposal_image_size", {2}, hw);
   }
 
-  nn::Profiler& profiler() override { return model_.profiler(); }
+  nn::Profiler* profiler() override { return &model_.profiler(); }
   nn::Profiler* layer_profiler() override { return &model_.layer_profiler(); }
 
  private:

@@ -25,17 +25,18 @@ namespace nnrun {
 
 const std::vector<ModelInfo>& models() {
   static const std::vector<ModelInfo> list = {
-      {"convnext_tiny", "torchvision convnext_tiny().features: input [N,3,H,W] -> features [N,768,H/32,W/32]", make_convnext, true},
-      {"convnext_small", "torchvision convnext_small().features", make_convnext, true},
-      {"convnext_base", "torchvision convnext_base().features", make_convnext, true},
-      {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext, true},
+      {"convnext_tiny", "torchvision convnext_tiny().features: input [N,3,H,W] -> features [N,768,H/32,W/32]", make_convnext, true,
+       make_convnext_api},
+      {"convnext_small", "torchvision convnext_small().features", make_convnext, true, make_convnext_api},
+      {"convnext_base", "torchvision convnext_base().features", make_convnext, true, make_convnext_api},
+      {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext, true, make_convnext_api},
       {"fasterrcnn_mobilenet_v3_large_fpn",
        "torchvision Faster R-CNN, MobileNetV3-Large FPN: input [1,3,H,W] RGB in [0,1] -> boxes [K,4], scores [K], "
        "labels [K] (I64) in input pixels",
-       make_detector, false},
+       make_detector, false, nullptr},
       {"fasterrcnn_mobilenet_v3_large_320_fpn", "the same at 320/640 px (torchvision's low-resolution defaults)",
-       make_detector, false},
-      {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector, false},
+       make_detector, false, nullptr},
+      {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector, false, nullptr},
   };
   return list;
 }
@@ -139,14 +140,20 @@ int main(int argc, char** argv) {
     outputs::install_interrupt_cleanup();
 
     std::unique_ptr<nnrun::Runner> runner;
-    {
+    if (info->make_api && !profile) {
+      // A plain run: through the public API, as an embedder would run the model.
+      options.max_isa = nn::active_isa();
+      options.threads = threads;
+      runner = info->make_api(model, weights_path, options);
+      for (const std::string& w : runner->warnings()) std::fprintf(stderr, "nnrun: warning: %s\n", w.c_str());
+    } else {
       // The file's bytes are released once the model has repacked them.
       weights::SafeTensors w = weights::SafeTensors::load(weights_path);
       runner = info->make(model, w, options);
-      if (dump_proposals && !runner->enable_proposal_dump())
-        args.fail("--dump-proposals: model '" + model + "' has no region proposals (detectors only)");
       apps::warn_unused_tensors("nnrun", w, runner->used_tensors(), model);
     }
+    if (dump_proposals && !runner->enable_proposal_dump())
+      args.fail("--dump-proposals: model '" + model + "' has no region proposals (detectors only)");
     {
       weights::SafeTensors x = weights::SafeTensors::load(input_path);
       runner->prepare(x);
@@ -164,8 +171,10 @@ int main(int argc, char** argv) {
     out.write(output_path, &outputs::temporary_file_hooks());
 
     if (repeat > 0 || profile) {
-      runner->profiler().set_enabled(profile);
-      runner->profiler().reset_times();
+      if (nn::Profiler* table = runner->profiler()) {
+        table->set_enabled(profile);
+        table->reset_times();
+      }
       nn::Profiler* layers = runner->layer_profiler();
       if (layers) {
         layers->set_enabled(profile);
@@ -179,7 +188,7 @@ int main(int argc, char** argv) {
         ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       }
       if (profile) {
-        std::fputs(runner->profiler().table().c_str(), stdout);
+        std::fputs(runner->profiler()->table().c_str(), stdout);
         if (layers) std::printf("\nby layer:\n%s", layers->table().c_str());
       }
       if (repeat > 0) {

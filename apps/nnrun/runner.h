@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "nn/isa.h"
+#include "nn/models/convnext.h"
 #include "nn/precision.h"
 #include "nn/profiler.h"
 #include "weights/safetensors.h"
@@ -15,8 +17,11 @@ namespace nnrun {
 class Runner {
  public:
   virtual ~Runner() = default;
-  // Names of every tensor the model reads from the weights file.
+  // Names of every tensor the model reads from the weights file (for the unused-tensor
+  // warning), or empty when the runner reports its own warnings().
   virtual std::vector<std::string> used_tensors() const = 0;
+  // Warnings found while loading (the API runners' unused tensors), one line each.
+  virtual std::vector<std::string> warnings() const { return {}; }
   // One line describing the loaded model (configuration, packed weight size).
   virtual std::string describe() const = 0;
   // Checks the input file's tensors (throws with "<file>: ..." on a problem) and
@@ -25,7 +30,8 @@ class Runner {
   virtual void forward() = 0;
   // Adds the outputs of the last forward, in PyTorch's layout.
   virtual void write_outputs(weights::Writer& out) const = 0;
-  virtual nn::Profiler& profiler() = 0;
+  // The per-layer time table, or null when the runner has none (the API runners).
+  virtual nn::Profiler* profiler() { return nullptr; }
   // A second, finer table (the detectors' backbone layers and RoI-head parts), or null.
   virtual nn::Profiler* layer_profiler() { return nullptr; }
   // Also write the RPN proposals; false when the model has none.
@@ -35,6 +41,10 @@ class Runner {
 // Command-line settings a model may take.
 struct RunOptions {
   nn::Precision precision = nn::Precision::F32;
+  // For the API runners, which take them as model and session options (the internal
+  // runners run under the main thread's settings).
+  nn::Isa max_isa = nn::Isa::Avx512;
+  int threads = 0;
 };
 
 struct ModelInfo {
@@ -43,6 +53,9 @@ struct ModelInfo {
   std::unique_ptr<Runner> (*make)(const std::string& name, const weights::SafeTensors& w,
                                   const RunOptions& options);
   bool has_precision;  // takes --precision bf16
+  // The same model through the public API (used when no --profile is asked), or null.
+  std::unique_ptr<Runner> (*make_api)(const std::string& name, const std::string& weights_path,
+                                      const RunOptions& options);
 };
 
 // Every model nnrun knows, in --help order.
@@ -50,5 +63,18 @@ const std::vector<ModelInfo>& models();
 
 std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::SafeTensors& w,
                                       const RunOptions& options);
+std::unique_ptr<Runner> make_convnext_api(const std::string& name, const std::string& weights_path,
+                                          const RunOptions& options);
+
+// The configuration `name` (convnext_tiny/_small/_base) stands for; empty dims for
+// "convnext" (any configuration).
+nn::ConvNeXtConfig named_convnext_config(const std::string& name);
+
+// The ConvNeXt input tensor 'input' [N,3,H,W] of an input file, checked (rank,
+// channels, size, finite values; throws "<file>: ...").
+struct ConvNeXtInput {
+  int n, h, w;
+};
+ConvNeXtInput convnext_input(const weights::SafeTensors& in);
 
 }  // namespace nnrun

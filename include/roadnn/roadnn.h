@@ -123,6 +123,8 @@ typedef struct roadnn_model_info {
   int input_height, input_width; /* StixelNExT++: the network input size; else 0 */
   int columns;             /* StixelNExT++: stixel columns U; else 0 */
   const char* stixel_head; /* StixelNExT++: "v0".."v4"; else "" */
+  int stage_widths[4];     /* ConvNeXt and StixelNExT++: the backbone's channels per stage */
+  int stage_depths[4];     /* ... and blocks per stage (ConvNeXt-Tiny: 96,192,384,768 / 3,3,9,3); else 0 */
 } roadnn_model_info;
 ROADNN_API roadnn_status roadnn_model_get_info(const roadnn_model* model, roadnn_model_info* out);
 

@@ -394,7 +394,13 @@ TEST_F(ApiMisuseModels, ModelInfo) {
   EXPECT_EQ(info.input_height, 0);
   EXPECT_EQ(info.columns, 0);
   EXPECT_STREQ(info.stixel_head, "");
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(info.stage_widths[i], small_convnext().dims[i]) << i;
+    EXPECT_EQ(info.stage_depths[i], small_convnext().depths[i]) << i;
+  }
   ASSERT_EQ(roadnn_model_get_info(stixel_->get(), &info), ROADNN_OK);
+  EXPECT_EQ(info.stage_widths[3], small_convnext().dims[3]) << "the backbone's configuration";
+  EXPECT_EQ(info.stage_depths[3], small_convnext().depths[3]);
   EXPECT_EQ(info.kind, ROADNN_MODEL_STIXELNEXT);
   EXPECT_EQ(info.input_height, kStixelH);  // from the metadata
   EXPECT_EQ(info.input_width, kStixelW);
@@ -405,6 +411,8 @@ TEST_F(ApiMisuseModels, ModelInfo) {
   EXPECT_EQ(info.kind, kDetKind);
   EXPECT_EQ(info.num_classes, kDetClasses);
   EXPECT_EQ(info.input_height, 0);
+  EXPECT_EQ(info.stage_widths[0], 0);
+  EXPECT_EQ(info.stage_depths[3], 0);
   EXPECT_GT(info.weight_bytes, 0u);
 }
 

@@ -159,6 +159,24 @@ TEST_F(NnrunCli, SameOutputForOneAndTwoThreads) {
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
 }
 
+// A plain ConvNeXt run goes through the public API (roadnn.hpp), a profiled one
+// through the engine's runner: both say which, and give the same bits, also with
+// the kernels capped (--isa, a model option on the API side).
+TEST_F(NnrunCli, PlainRunsGoThroughTheApiWithTheEnginesBits) {
+  for (const std::string isa : {"", "--isa scalar"}) {
+    Result api = run("w.safetensors", "x.safetensors", isa);
+    ASSERT_EQ(api.code, 0) << api.err;
+    EXPECT_NE(api.err.find("(through the API)"), std::string::npos) << api.err;
+    auto a = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+    Result engine = run("w.safetensors", "x.safetensors", isa + " --profile");
+    ASSERT_EQ(engine.code, 0) << engine.err;
+    EXPECT_EQ(engine.err.find("(through the API)"), std::string::npos) << engine.err;
+    auto b = weights::SafeTensors::load(path("y.safetensors")).f32("features");
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float))) << isa;
+  }
+}
+
 // --precision bf16 is the library's bf16 model, bitwise, and says so on stderr.
 TEST_F(NnrunCli, PrecisionBf16IsTheLibrarysBf16Model) {
   if (!nn::bf16_gemm_available()) GTEST_SKIP() << "this CPU has no AVX512_BF16";
