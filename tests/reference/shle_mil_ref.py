@@ -1,0 +1,140 @@
+"""Reference for the MIL tracker: OpenCV's own cv2.TrackerMIL (Debian's
+python3-opencv, OpenCV 4.6) on rendered sequences, as the released SHLE code
+calls it (BGR frames, default parameters, init with an int (x, y, w, h) box).
+
+Renders textured objects moving with sub-pixel steps over panning textured
+backgrounds (bilinear, in numpy), runs one cv2.TrackerMIL per sequence in this
+one process, in the order listed (OpenCV's Haar features use the process's
+rand(), so later trackers continue its sequence, as the released script's gaps
+do), and writes OUT/shle_mil.safetensors:
+  <name>.frames   U8  [N, H, W]  channel 0 (blue) of the BGR frames, what MIL reads
+  <name>.boxes    I32 [N, 4]     x, y, w, h: the init box, then every update's box
+  <name>.ok       U8  [N]        1 when init / update returned True
+  integral        F32 [H+1, W+1] channel 0 of cv2.integral(first frame of `drive`, CV_32F)
+metadata: sequences (comma-separated, in run order), opencv (cv2.__version__),
+integral_of (the sequence whose first frame is in `integral`).
+"""
+import argparse
+import os
+import sys
+
+INSTALL_HINT = ("the MIL tracker reference needs OpenCV's Python module for /usr/bin/python3: "
+                "apt-get install -y python3-opencv python3-numpy")
+
+try:
+    import numpy as np
+    import cv2
+except ImportError as e:
+    sys.exit("error: %s (%s)" % (INSTALL_HINT, e))
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "weights"))
+import safetensors_io  # noqa: E402
+
+
+def smooth_texture(rng, h, w, scale):
+    """Colour texture: white noise blurred at `scale` px plus fine noise, 0..255 float, BGR."""
+    out = np.empty((h, w, 3), np.float64)
+    for c in range(3):
+        coarse = rng.random((h // scale + 2, w // scale + 2))
+        ys = np.linspace(0, coarse.shape[0] - 1.001, h)
+        xs = np.linspace(0, coarse.shape[1] - 1.001, w)
+        y0, x0 = ys.astype(int), xs.astype(int)
+        fy, fx = (ys - y0)[:, None], (xs - x0)[None, :]
+        a = coarse[y0][:, x0] * (1 - fx) + coarse[y0][:, x0 + 1] * fx
+        b = coarse[y0 + 1][:, x0] * (1 - fx) + coarse[y0 + 1][:, x0 + 1] * fx
+        out[:, :, c] = 200 * (a * (1 - fy) + b * fy) + 55 * rng.random((h, w))
+    return out
+
+
+def sample_bilinear(tex, ys, xs):
+    """tex sampled at float coordinates (clamped), bilinear."""
+    h, w = tex.shape[:2]
+    ys = np.clip(ys, 0, h - 1.0001)
+    xs = np.clip(xs, 0, w - 1.0001)
+    y0, x0 = ys.astype(int), xs.astype(int)
+    fy, fx = (ys - y0)[..., None], (xs - x0)[..., None]
+    return ((tex[y0, x0] * (1 - fx) + tex[y0, x0 + 1] * fx) * (1 - fy)
+            + (tex[y0 + 1, x0] * (1 - fx) + tex[y0 + 1, x0 + 1] * fx) * fy)
+
+
+def render(spec):
+    """Frames (uint8 BGR) of one sequence and the integer init box."""
+    rng = np.random.default_rng(spec["seed"])
+    h, w, n = spec["height"], spec["width"], spec["frames"]
+    bg = smooth_texture(rng, h + 200, w + 200, spec["bg_scale"])
+    ow, oh = spec["object"]
+    obj = smooth_texture(rng, oh, ow, 6) * 0.6 + 90
+    frames = []
+    gy, gx = np.mgrid[0:h, 0:w].astype(np.float64)
+    for t in range(n):
+        pan = np.array(spec["pan"]) * t
+        img = sample_bilinear(bg, gy + 100 + pan[1], gx + 100 + pan[0])
+        px = spec["start"][0] + spec["velocity"][0] * t + spec["wobble"] * np.sin(0.7 * t)
+        py = spec["start"][1] + spec["velocity"][1] * t + spec["wobble"] * np.cos(0.5 * t)
+        y0, y1 = max(0, int(np.floor(py))), min(h, int(np.ceil(py + oh)))
+        x0, x1 = max(0, int(np.floor(px))), min(w, int(np.ceil(px + ow)))
+        ly, lx = gy[y0:y1, x0:x1] - py, gx[y0:y1, x0:x1] - px
+        inside = (ly >= 0) & (ly <= oh - 1) & (lx >= 0) & (lx <= ow - 1)
+        patch = sample_bilinear(obj, ly, lx)
+        region = img[y0:y1, x0:x1]
+        region[inside] = patch[inside]
+        frames.append(np.clip(np.rint(img), 0, 255).astype(np.uint8))
+    box = (int(spec["start"][0]), int(spec["start"][1]), ow, oh)
+    return frames, box
+
+
+# Run order matters (see above); the C++ test runs one MilTracker through them in this order.
+SEQUENCES = [
+    dict(name="patch", seed=31, height=240, width=320, frames=30, bg_scale=9, object=(48, 36),
+         start=(120.0, 90.0), velocity=(1.37, -0.61), pan=(0.3, 0.1), wobble=1.5),
+    # 720 x 1250: sums beyond 2^24 (float rounding of the integral) and a row tail
+    # after the last SIMD block (1250 = 39 * 32 + 2).
+    dict(name="drive", seed=32, height=720, width=1250, frames=16, bg_scale=14, object=(150, 70),
+         start=(560.0, 250.0), velocity=(-3.3, 1.9), pan=(1.1, 0.4), wobble=2.0),
+    # Odd size, an object near the top-left corner drifting into it: clipped samples.
+    dict(name="corner", seed=33, height=181, width=263, frames=24, bg_scale=5, object=(31, 27),
+         start=(14.0, 11.0), velocity=(-0.45, -0.35), pan=(-0.2, 0.25), wobble=0.8),
+    # A second gap on the same scene as `patch`: the tracker re-created in the same
+    # process (features continue rand()).
+    dict(name="patch_again", seed=31, height=240, width=320, frames=12, bg_scale=9, object=(48, 36),
+         start=(120.0, 90.0), velocity=(1.37, -0.61), pan=(0.3, 0.1), wobble=1.5),
+]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", required=True, help="output folder")
+    args = ap.parse_args()
+    if not hasattr(cv2, "TrackerMIL_create"):
+        sys.exit("error: this cv2 (%s) has no TrackerMIL_create; %s" % (cv2.__version__, INSTALL_HINT))
+    tensors, names = {}, []
+    integral = None
+    for spec in SEQUENCES:
+        frames, box = render(spec)
+        tracker = cv2.TrackerMIL_create()
+        tracker.init(frames[0], box)  # 4.6's init returns None; it raises on failure
+        boxes, ok = [list(box)], [1]
+        for f in frames[1:]:
+            good, b = tracker.update(f)
+            boxes.append([int(v) for v in b])
+            ok.append(1 if good else 0)
+        name = spec["name"]
+        names.append(name)
+        tensors[name + ".frames"] = np.ascontiguousarray(np.stack([f[:, :, 0] for f in frames]))
+        tensors[name + ".boxes"] = np.array(boxes, np.int32)
+        tensors[name + ".ok"] = np.array(ok, np.uint8)
+        if name == "drive":
+            integral = cv2.integral(frames[0], sdepth=cv2.CV_32F)[:, :, 0].astype(np.float32)
+        moved = np.abs(np.diff(np.array(boxes)[:, :2], axis=0)).sum(axis=1)
+        print("%s: %d frames %dx%d, box %s -> %s, moved on %d updates"
+              % (name, len(frames), spec["width"], spec["height"], boxes[0], boxes[-1], int((moved > 0).sum())))
+    tensors["integral"] = np.ascontiguousarray(integral)
+    os.makedirs(args.out, exist_ok=True)
+    path = os.path.join(args.out, "shle_mil.safetensors")
+    safetensors_io.save(path, tensors, {"sequences": ",".join(names), "opencv": cv2.__version__,
+                                        "integral_of": "drive"})
+    print("wrote", path)
+
+
+if __name__ == "__main__":
+    main()
