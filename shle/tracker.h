@@ -27,6 +27,9 @@ class Tracker {
   virtual bool init(const GrayView& image, const Box& box) = 0;
   // Finds the box in the next frame; false when lost or not seeded.
   virtual bool update(const GrayView& image, Box* box) = 0;
+  // The single channel of an RGB frame this tracker should be given: luma
+  // (to_gray) unless the tracker reproduces a program that reads another one.
+  virtual void input_channel(const RgbImage& rgb, GrayImage* out) const { to_gray(rgb, out); }
 };
 
 struct NccOptions {
@@ -82,8 +85,9 @@ struct MilOptions {
 // opencv/opencv 4.6): the float integral image of the single channel it is
 // given, glibc rand() Haar features (shle/mil_haar.h), cv::RNG window sampling
 // (shle/mil_sampler.h) and the float MILBoost classifier (shle/mil_boost.h).
-// Fed channel 0 of the frames OpenCV sees (blue of a BGR image), it returns
-// cv2.TrackerMIL's boxes exactly, including successive inits in one process.
+// Fed channel 0 of the frames OpenCV sees (blue of a BGR image: input_channel()),
+// it returns cv2.TrackerMIL's boxes exactly, including successive inits in one
+// process.
 // The box is truncated to int (x, y, w, h) and never clipped; its size never
 // changes; it never reports a loss (as MIL), only failing when no window fits.
 class MilTracker : public Tracker {
@@ -92,6 +96,8 @@ class MilTracker : public Tracker {
   std::string name() const override { return "mil"; }
   bool init(const GrayView& image, const Box& box) override;
   bool update(const GrayView& image, Box* box) override;
+  // Blue: OpenCV's channel 0 of the BGR frames cv2.imread gives the released code.
+  void input_channel(const RgbImage& rgb, GrayImage* out) const override;
 
  private:
   // Positives and negatives around (x_, y_) from the sampler's generator; false

@@ -44,6 +44,14 @@ bool MilTracker::sample_training_windows() {
   return !pos_.empty() && !neg_.empty();
 }
 
+void MilTracker::input_channel(const RgbImage& rgb, GrayImage* out) const {
+  out->width = rgb.width;
+  out->height = rgb.height;
+  const std::size_t n = static_cast<std::size_t>(rgb.width) * rgb.height;
+  out->px.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out->px[i] = rgb.rgb[3 * i + 2];
+}
+
 bool MilTracker::init(const GrayView& img, const Box& box) {
   ready_ = false;
   if (!box.finite() || !usable(img)) return false;

@@ -10,6 +10,7 @@
 #include "shle/mil_haar.h"
 #include "shle/mil_random.h"
 #include "shle/mil_sampler.h"
+#include "shle/tracker.h"
 
 namespace {
 
@@ -113,6 +114,25 @@ TEST(MilParts, HaarValueIsTheWeightedMeanDifference) {
   EXPECT_FLOAT_EQ(shle::haar_value(f, ii, 5, 3, 30, 20), -100.0f);
   // Shifted left by 5: the right area is half 10, half 110 (mean 60).
   EXPECT_FLOAT_EQ(shle::haar_value(f, ii, 0, 3, 30, 20), -50.0f);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(MilParts, ReadsTheBlueChannelOthersReadLuma) {
+  shle::RgbImage rgb;
+  rgb.width = 2;
+  rgb.height = 1;
+  rgb.rgb = {10, 20, 30, 200, 100, 50};
+  shle::GrayImage g;
+  shle::MilTracker().input_channel(rgb, &g);
+  ASSERT_EQ(g.px.size(), 2u);
+  EXPECT_EQ(g.px[0], 30);
+  EXPECT_EQ(g.px[1], 50);
+  shle::GrayImage luma = shle::to_gray(rgb);
+  shle::NccTracker().input_channel(rgb, &g);
+  EXPECT_EQ(g.px, luma.px);
 }
 
 }  // namespace
