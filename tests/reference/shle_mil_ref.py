@@ -11,12 +11,20 @@ do), and writes OUT/shle_mil.safetensors:
   <name>.boxes    I32 [N, 4]     x, y, w, h: the init box, then every update's box
   <name>.ok       U8  [N]        1 when init / update returned True
   integral        F32 [H+1, W+1] channel 0 of cv2.integral(first frame of `drive`, CV_32F)
+  <level>.integral, <level>.boxes: the same integral and a fresh tracker's boxes on
+                  `drive`, from a child process in which OPENCV_CPU_DISABLE makes OpenCV
+                  dispatch a lower SIMD level (AVX2, then SSE4), whose float integral
+                  rounds differently
 metadata: sequences (comma-separated, in run order), opencv (cv2.__version__),
-integral_of (the sequence whose first frame is in `integral`).
+integral_of (the sequence whose first frame is in `integral`), lanes (the SIMD block
+width of OpenCV's integral in this process: 32 AVX-512, 16 AVX2, 8 otherwise),
+levels (level:lanes,... of the child processes).
 """
 import argparse
 import os
+import subprocess
 import sys
+import tempfile
 
 INSTALL_HINT = ("the MIL tracker reference needs OpenCV's Python module for /usr/bin/python3: "
                 "apt-get install -y python3-opencv python3-numpy")
@@ -101,23 +109,57 @@ SEQUENCES = [
 ]
 
 
+# OpenCV feature names; the composite AVX512-* levels must go too, or the dispatcher keeps them.
+NO_AVX512 = "AVX512-SKX,AVX512-CNL,AVX512-CLX,AVX512-ICL,AVX512F,AVX512BW,AVX512CD,AVX512DQ,AVX512VL"
+LEVELS = [("avx2", NO_AVX512), ("sse4", NO_AVX512 + ",AVX2")]
+
+
+def integral_lanes():
+    """Block width of cv::integral's SIMD code as OpenCV dispatches it in this process."""
+    if cv2.checkHardwareSupport(256):  # CV_CPU_AVX512_SKX
+        return 32
+    if cv2.checkHardwareSupport(11):  # CV_CPU_AVX2
+        return 16
+    return 8
+
+
+def track(frames, box):
+    tracker = cv2.TrackerMIL_create()
+    tracker.init(frames[0], box)  # 4.6's init returns None; it raises on failure
+    boxes, ok = [list(box)], [1]
+    for f in frames[1:]:
+        good, b = tracker.update(f)
+        boxes.append([int(v) for v in b])
+        ok.append(1 if good else 0)
+    return boxes, ok
+
+
+def child(path):
+    """In a process with lowered dispatch: `drive`'s integral and a fresh tracker's boxes."""
+    spec = next(s for s in SEQUENCES if s["name"] == "drive")
+    frames, box = render(spec)
+    boxes, _ = track(frames, box)
+    integral = cv2.integral(frames[0], sdepth=cv2.CV_32F)[:, :, 0].astype(np.float32)
+    np.savez(path, integral=integral, boxes=np.array(boxes, np.int32), lanes=integral_lanes())
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", required=True, help="output folder")
+    ap.add_argument("--out", help="output folder")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not hasattr(cv2, "TrackerMIL_create"):
         sys.exit("error: this cv2 (%s) has no TrackerMIL_create; %s" % (cv2.__version__, INSTALL_HINT))
+    if args.child:
+        child(args.child)
+        return
+    if not args.out:
+        ap.error("--out is required")
     tensors, names = {}, []
     integral = None
     for spec in SEQUENCES:
         frames, box = render(spec)
-        tracker = cv2.TrackerMIL_create()
-        tracker.init(frames[0], box)  # 4.6's init returns None; it raises on failure
-        boxes, ok = [list(box)], [1]
-        for f in frames[1:]:
-            good, b = tracker.update(f)
-            boxes.append([int(v) for v in b])
-            ok.append(1 if good else 0)
+        boxes, ok = track(frames, box)
         name = spec["name"]
         names.append(name)
         tensors[name + ".frames"] = np.ascontiguousarray(np.stack([f[:, :, 0] for f in frames]))
@@ -129,10 +171,23 @@ def main():
         print("%s: %d frames %dx%d, box %s -> %s, moved on %d updates"
               % (name, len(frames), spec["width"], spec["height"], boxes[0], boxes[-1], int((moved > 0).sum())))
     tensors["integral"] = np.ascontiguousarray(integral)
+    levels = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for level, disable in LEVELS:
+            out = os.path.join(tmp, level + ".npz")
+            env = dict(os.environ, OPENCV_CPU_DISABLE=disable)
+            subprocess.run([sys.executable, os.path.abspath(__file__), "--child", out], env=env, check=True)
+            got = np.load(out)
+            tensors[level + ".integral"] = np.ascontiguousarray(got["integral"])
+            tensors[level + ".boxes"] = got["boxes"]
+            levels.append("%s:%d" % (level, int(got["lanes"])))
+            print("%s (integral lanes %d): drive box %s -> %s"
+                  % (level, int(got["lanes"]), got["boxes"][0].tolist(), got["boxes"][-1].tolist()))
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "shle_mil.safetensors")
     safetensors_io.save(path, tensors, {"sequences": ",".join(names), "opencv": cv2.__version__,
-                                        "integral_of": "drive"})
+                                        "integral_of": "drive", "lanes": str(integral_lanes()),
+                                        "levels": ",".join(levels)})
     print("wrote", path)
 
 

@@ -152,6 +152,53 @@ TEST(MilOpenCV, DeterministicAndIndependentOfOtherTrackers) {
     }
 }
 
+// Our CPU check picks the block width OpenCV's dispatcher picked in the reference run.
+TEST(MilOpenCV, IntegralBlockWidthIsOpenCVsDispatch) {
+  EXPECT_EQ(std::to_string(shle::opencv_integral_lanes()), reference().metadata().at("lanes"));
+}
+
+// OpenCV made to run its lower SIMD levels (AVX2, SSE4) on this CPU: a different
+// rounding of the integral image, which the tracker follows with integral_lanes.
+TEST(MilOpenCV, LowerSimdLevelsToo) {
+  const weights::SafeTensors& st = reference();
+  const std::vector<Sequence> seqs = sequences();
+  const Sequence* drive = nullptr;
+  for (const Sequence& s : seqs)
+    if (s.name == st.metadata().at("integral_of")) drive = &s;
+  ASSERT_NE(drive, nullptr);
+  std::stringstream levels(st.metadata().at("levels"));
+  std::string item;
+  int checked = 0;
+  while (std::getline(levels, item, ',')) {
+    const std::string level = item.substr(0, item.find(':'));
+    const int lanes = std::stoi(item.substr(item.find(':') + 1));
+    shle::MilIntegral ii;
+    shle::mil_integral(drive->frame(0), lanes, 3, &ii);
+    const std::vector<float> want = copy<float>(st, level + ".integral");
+    ASSERT_EQ(want.size(), ii.sum.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < want.size(); ++i) differ += want[i] != ii.sum[i];
+    EXPECT_EQ(differ, 0u) << level << " (lanes " << lanes << ")";
+    shle::MilOptions opt;
+    opt.integral_lanes = lanes;
+    Sequence alone = *drive;
+    alone.boxes = copy<std::int32_t>(st, level + ".boxes");
+    const TrackRun r = run({alone}, opt);
+    double max_diff = 0;
+    for (int i = 0; i < alone.frames; ++i) {
+      const std::int32_t* w = &alone.boxes[static_cast<std::size_t>(i) * 4];
+      const shle::Box& b = r.boxes[0][i];
+      max_diff = std::max({max_diff, std::fabs(b.x0 - w[0]), std::fabs(b.y0 - w[1]), std::fabs(b.width() - w[2]),
+                           std::fabs(b.height() - w[3])});
+    }
+    EXPECT_LE(max_diff, 1e-3) << level;
+    std::printf("[ MIL ] %s at OpenCV's %s level (lanes %d): max box difference %.6g px\n", drive->name.c_str(),
+                level.c_str(), lanes, max_diff);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+}
+
 // The last sequence is the first scene again in a later tracker: OpenCV drew its
 // features further along rand(), and a tracker starting the stream afresh
 // (another process) must come out differently, or the test above proves little.

@@ -3,6 +3,7 @@
 // the Haar features' geometry.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <vector>
 
@@ -133,6 +134,33 @@ TEST(MilParts, ReadsTheBlueChannelOthersReadLuma) {
   shle::GrayImage luma = shle::to_gray(rgb);
   shle::NccTracker().input_channel(rgb, &g);
   EXPECT_EQ(g.px, luma.px);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(MilParts, BadInputFailsCleanly) {
+  std::vector<std::uint8_t> px(120 * 90);
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = static_cast<std::uint8_t>((i * 37) ^ (i >> 5));
+  const shle::GrayView img{120, 90, px.data()};
+  shle::MilTracker t;
+  shle::Box b{1, 2, 3, 4};
+  EXPECT_FALSE(t.update(img, &b));                                  // not seeded
+  EXPECT_FALSE(t.init(img, shle::Box{0, 0, 130, 40}));              // wider than the image
+  EXPECT_FALSE(t.init(img, shle::Box{-30, 10, -5, 40}));            // left of the image
+  EXPECT_FALSE(t.init(img, shle::Box{10, 10, 10.5, 40}));           // zero width after truncation
+  EXPECT_FALSE(t.init(img, shle::Box{NAN, 10, 40, 40}));
+  EXPECT_FALSE(t.init(shle::GrayView{120, 90, nullptr}, shle::Box{10, 10, 40, 40}));
+  EXPECT_FALSE(t.init(shle::GrayView{70000, 1, px.data()}, shle::Box{10, 0, 40, 1}));  // row sums inexact
+  ASSERT_TRUE(t.init(img, shle::Box{40, 30, 70, 55}));
+  // A next frame too small for the window: no detection, box untouched.
+  const shle::GrayView small{32, 20, px.data()};
+  EXPECT_FALSE(t.update(small, &b));
+  EXPECT_EQ(b.x0, 1);
+  EXPECT_TRUE(t.update(img, &b));
+  EXPECT_EQ(b.width(), 30);
+  EXPECT_EQ(b.height(), 25);
 }
 
 }  // namespace
