@@ -19,6 +19,12 @@ metadata: sequences (comma-separated, in run order), opencv (cv2.__version__),
 integral_of (the sequence whose first frame is in `integral`), lanes (the SIMD block
 width of OpenCV's integral in this process: 32 AVX-512, 16 AVX2, 8 otherwise),
 levels (level:lanes,... of the child processes).
+
+With --synth SCENE (a sequence shle_synth wrote in the released layout) it instead
+fills gaps as the released stage 1 does: every GAP-th frame is a seed (its LabelMe
+box truncated to int x, y, w, h, a new cv2.TrackerMIL), the frames between are
+tracked; writes OUT/shle_mil_synth.safetensors with frames (U8 [N, H, W], channel
+0 of cv2.imread), seeds (I32 [S]: frame indices), boxes (I32 [N, 4]) and ok (U8 [N]).
 """
 import argparse
 import os
@@ -143,9 +149,50 @@ def child(path):
     np.savez(path, integral=integral, boxes=np.array(boxes, np.int32), lanes=integral_lanes())
 
 
+def labelme_box(path):
+    """First shape's points as the int (x, y, w, h) the released code seeds with."""
+    import json
+    with open(path) as f:
+        pts = json.load(f)["shapes"][0]["points"]
+    x0, y0 = min(p[0] for p in pts), min(p[1] for p in pts)
+    x1, y1 = max(p[0] for p in pts), max(p[1] for p in pts)
+    return (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
+
+
+def synth(scene, out, gap=8):
+    import glob
+    pngs = sorted(glob.glob(os.path.join(scene, "left_colorimages", "*.png")))
+    if not pngs:
+        sys.exit("error: no left_colorimages/*.png in %s (run shle_synth first)" % scene)
+    frames = []
+    for p in pngs:
+        img = cv2.imread(p)  # BGR, as the released code reads it
+        if img is None:
+            sys.exit("error: cv2 cannot read %s" % p)
+        frames.append(img)
+    boxes, ok, seeds = [], [], []
+    for start in range(0, len(frames), gap):
+        box = labelme_box(os.path.splitext(pngs[start])[0] + ".json")
+        seg_boxes, seg_ok = track(frames[start:start + gap], box)
+        seeds.append(start)
+        boxes += seg_boxes
+        ok += seg_ok
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, "shle_mil_synth.safetensors")
+    safetensors_io.save(path, {
+        "frames": np.ascontiguousarray(np.stack([f[:, :, 0] for f in frames])),
+        "seeds": np.array(seeds, np.int32),
+        "boxes": np.array(boxes, np.int32),
+        "ok": np.array(ok, np.uint8)}, {"scene": os.path.basename(os.path.normpath(scene)),
+                                         "opencv": cv2.__version__, "lanes": str(integral_lanes())})
+    print("%s: %d frames %dx%d, %d seeds, wrote %s" % (scene, len(frames), frames[0].shape[1],
+                                                       frames[0].shape[0], len(seeds), path))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", help="output folder")
+    ap.add_argument("--synth", metavar="SCENE", help="fill the gaps of this shle_synth sequence instead")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not hasattr(cv2, "TrackerMIL_create"):
@@ -155,6 +202,9 @@ def main():
         return
     if not args.out:
         ap.error("--out is required")
+    if args.synth:
+        synth(args.synth, args.out)
+        return
     tensors, names = {}, []
     integral = None
     for spec in SEQUENCES:
