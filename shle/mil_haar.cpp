@@ -65,6 +65,16 @@ bool draw_haar_feature(int w, int h, GlibcRand* rand, HaarFeature* out, long max
   float cum[6];
   cum[0] = p;
   for (int k = 1; k < 6; ++k) cum[k] = cum[k - 1] + p;
+  // Size factors (height, width) of the whole feature per type.
+  static const int fh[6] = {2, 1, 4, 1, 2, 3}, fw[6] = {1, 2, 1, 4, 2, 3};
+  // Can any type fit at all (at x = y = 0 with the largest base size)? If not,
+  // OpenCV would draw forever; fail before drawing.
+  bool possible = false;
+  for (int t = 0; t < 6; ++t) {
+    const long bw = (w - 1) / fw[t], bh = (h - 1) / fh[t];
+    possible = possible || (bw >= 1 && bh >= 1 && bw * fw[t] * bh * fh[t] >= 9);
+  }
+  if (!possible) return false;
   for (long attempt = 0; attempt < max_attempts; ++attempt) {
     const int y = rand->next() % h;
     const int x = rand->next() % w;
@@ -76,8 +86,6 @@ bool draw_haar_feature(int w, int h, GlibcRand* rand, HaarFeature* out, long max
     int type = 0;
     while (type < 6 && !(prob < cum[type])) ++type;
     if (type == 6) continue;  // unreachable: prob <= 1 < cum[5]
-    // Size factors (height, width) of the whole feature per type.
-    static const int fh[6] = {2, 1, 4, 1, 2, 3}, fw[6] = {1, 2, 1, 4, 2, 3};
     if (y + bh * fh[type] >= h || x + bw * fw[type] >= w) continue;
     if (bh * fh[type] * bw * fw[type] < 9) continue;
     HaarFeature f;

@@ -46,8 +46,9 @@ struct HaarFeature {
 
 // Draws one feature for a window of w x h exactly as OpenCV does (rand() for
 // the row, the column, the base width and height, then the type; redrawn until
-// it fits strictly inside with an area of at least 9). False when no feature
-// was found within `max_attempts` draws (OpenCV would loop forever).
+// it fits strictly inside with an area of at least 9). False, without drawing,
+// when no feature can fit the patch (OpenCV would loop forever), or when none
+// was found within `max_attempts` draws.
 bool draw_haar_feature(int w, int h, GlibcRand* rand, HaarFeature* out, long max_attempts = 10000000);
 
 // The feature's value on the window whose top-left integral element is (x, y)

@@ -21,9 +21,10 @@ class Tracker {
  public:
   virtual ~Tracker() = default;
   virtual std::string name() const = 0;
-  // Seeds on `box` in `image` (truncated to whole pixels and clipped to the
-  // image). False when the box cannot be tracked (smaller than 2x2 inside the
-  // image, or no texture); update() then fails until the next init.
+  // Seeds on `box` in `image` (truncated to whole pixels; NCC also clips it to
+  // the image). False when the box cannot be tracked (NCC: smaller than 2x2
+  // inside the image or no texture; MIL: no window or Haar feature fits);
+  // update() then fails until the next init.
   virtual bool init(const GrayView& image, const Box& box) = 0;
   // Finds the box in the next frame; false when lost or not seeded.
   virtual bool update(const GrayView& image, Box* box) = 0;

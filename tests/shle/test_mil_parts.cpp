@@ -95,9 +95,15 @@ TEST(MilParts, HaarFeaturesLieInsideWithAreaAtLeastNine) {
   EXPECT_GT(types[2], 0);
   EXPECT_GT(types[3], 0);
   EXPECT_GT(types[4], 0);
-  // A patch too small for any feature fails instead of looping forever.
+  // A patch too small for any feature fails at once instead of looping forever
+  // (and leaves rand() untouched); a thin but feasible one succeeds.
   shle::HaarFeature f;
-  EXPECT_FALSE(shle::draw_haar_feature(2, 2, &r, &f, 10000));
+  shle::GlibcRand before = r;
+  EXPECT_FALSE(shle::draw_haar_feature(2, 2, &r, &f));
+  EXPECT_FALSE(shle::draw_haar_feature(300, 1, &r, &f));
+  EXPECT_EQ(r.next(), before.next());
+  EXPECT_TRUE(shle::draw_haar_feature(2, 11, &r, &f));
+  EXPECT_TRUE(shle::draw_haar_feature(300, 3, &r, &f));
 }
 
 TEST(MilParts, HaarValueIsTheWeightedMeanDifference) {
