@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "shle/mil_boost.h"
+#include "shle/mil_haar.h"
+#include "shle/mil_random.h"
+#include "shle/mil_sampler.h"
 #include "shle/types.h"
 
 namespace shle {
@@ -17,12 +21,16 @@ class Tracker {
  public:
   virtual ~Tracker() = default;
   virtual std::string name() const = 0;
-  // Seeds on `box` in `image` (truncated to whole pixels and clipped to the
-  // image). False when the box cannot be tracked (smaller than 2x2 inside the
-  // image, or no texture); update() then fails until the next init.
+  // Seeds on `box` in `image` (truncated to whole pixels; NCC also clips it to
+  // the image). False when the box cannot be tracked (NCC: smaller than 2x2
+  // inside the image or no texture; MIL: no window or Haar feature fits);
+  // update() then fails until the next init.
   virtual bool init(const GrayView& image, const Box& box) = 0;
   // Finds the box in the next frame; false when lost or not seeded.
   virtual bool update(const GrayView& image, Box* box) = 0;
+  // The single channel of an RGB frame this tracker should be given: luma
+  // (to_gray) unless the tracker reproduces a program that reads another one.
+  virtual void input_channel(const RgbImage& rgb, GrayImage* out) const { to_gray(rgb, out); }
 };
 
 struct NccOptions {
@@ -56,60 +64,59 @@ class NccTracker : public Tracker {
   std::vector<std::int64_t> integral_, integral_sq_;
 };
 
+// OpenCV 4.6's TrackerMIL::Params defaults, plus what OpenCV fixes inside.
 struct MilOptions {
-  double init_radius = 3.0;    // positives: offsets with dx^2 + dy^2 < r^2 (the 5x5 block)
-  double search_radius = 25;   // detection: offsets within this radius
-  double negative_radius = 50; // negatives: annulus 1.5 init_radius .. this
-  int max_negatives = 65;
-  int features = 250;          // random Haar features = weak classifiers
-  int selected = 50;           // chosen per update by MILBoost
-  double learning_rate = 0.85;
-  std::uint64_t seed = 0x4D494C;  // features and negatives (deterministic run to run)
+  double init_radius = 3.0;    // samplerInitInRadius: positives dx^2 + dy^2 < r^2 (the 5x5 block)
+  double search_radius = 25;   // samplerSearchWinSize: detection within r, negatives below 2 r
+  int max_negatives = 65;      // samplerInitMaxNegNum
+  int features = 250;          // featureSetNumFeatures: random Haar features = weak classifiers
+  int selected = 50;           // ClfMilBoost's numSel, chosen per update
+  double learning_rate = 0.85; // ClfMilBoost's lRate (used as float)
+  // The C library's rand() seed of the process OpenCV runs in: 1 when nothing
+  // called srand() (Python, the released scripts). One MilTracker stands for
+  // one such process: its seeds draw their features one after the other.
+  std::uint32_t rand_seed = 1;
+  // Block width of OpenCV's cv::integral SIMD path (see shle/mil_haar.h); -1 =
+  // what OpenCV picks on this CPU (32 with AVX-512, 16 with AVX2), 0 = no blocks.
+  int integral_lanes = -1;
 };
 
-// A port of the MIL tracker (Babenko et al.) as OpenCV 4.6 configures it
-// (../shared/reference/shle.md section 9): online MILBoost over random Haar
-// features on the single-channel integral image, positives from the 5x5 block
-// around the box (one noisy-OR bag), random negatives from an annulus, detection
-// by the best window within the search radius. Written from the algorithm's
-// description: it follows OpenCV's parameters, not its random numbers, so the
-// boxes are not bit-identical to cv::TrackerMIL. Never reports a loss (as MIL).
+// OpenCV 4.6's cv::TrackerMIL re-created operation by operation
+// (../shared/reference/shle.md section 9 and modules/video/src/tracking/ in
+// opencv/opencv 4.6): the float integral image of the single channel it is
+// given, glibc rand() Haar features (shle/mil_haar.h), cv::RNG window sampling
+// (shle/mil_sampler.h) and the float MILBoost classifier (shle/mil_boost.h).
+// Fed channel 0 of the frames OpenCV sees (blue of a BGR image: input_channel()),
+// it returns cv2.TrackerMIL's boxes exactly, including successive inits in one
+// process.
+// The box is truncated to int (x, y, w, h) and never clipped; its size never
+// changes; it never reports a loss (as MIL), only failing when no window fits.
 class MilTracker : public Tracker {
  public:
-  explicit MilTracker(const MilOptions& options = {}) : opt_(options) {}
+  explicit MilTracker(const MilOptions& options = {});
   std::string name() const override { return "mil"; }
   bool init(const GrayView& image, const Box& box) override;
   bool update(const GrayView& image, Box* box) override;
+  // Blue: OpenCV's channel 0 of the BGR frames cv2.imread gives the released code.
+  void input_channel(const RgbImage& rgb, GrayImage* out) const override;
 
  private:
-  struct Rect {
-    int x, y, w, h;
-    double weight;  // +-1 or -2, divided by the area
-  };
-  struct Feature {
-    std::vector<Rect> rects;
-  };
-  struct Stump {
-    double mu_pos = 0, var_pos = 1, mu_neg = 0, var_neg = 1;
-    bool seen_pos = false, seen_neg = false;
-    double eval(double x) const;
-  };
-  void integral(const GrayView& image);
-  double feature_value(const Feature& f, int x, int y) const;
-  std::vector<std::pair<int, int>> positives(int x, int y, int cols, int rows) const;
-  std::vector<std::pair<int, int>> negatives(int x, int y, int cols, int rows);
-  void train(const std::vector<std::pair<int, int>>& pos, const std::vector<std::pair<int, int>>& neg);
-  std::uint64_t next_random();
+  // Positives and negatives around (x_, y_) from the sampler's generator; false
+  // when either set is empty.
+  bool sample_training_windows();
+  void features_of(const std::vector<MilWindow>& windows, std::vector<float>* values) const;
 
   MilOptions opt_;
+  GlibcRand rand_;
+  CvRng rng_;
+  int lanes_ = 0;
   bool ready_ = false;
   int x_ = 0, y_ = 0, w_ = 0, h_ = 0;
-  int iw_ = 0, ih_ = 0;
-  std::uint64_t rng_ = 0, inits_ = 0;
-  std::vector<Feature> features_;
-  std::vector<Stump> stumps_;
-  std::vector<int> chosen_;
-  std::vector<std::int64_t> ii_;  // (iw+1) x (ih+1) integral image
+  std::vector<HaarFeature> features_;
+  MilBoost boost_;
+  MilIntegral ii_;
+  std::vector<MilWindow> pos_, neg_, detect_;
+  std::vector<float> pos_values_, neg_values_, chosen_;
 };
 
 // "ncc", "mil" or "none" (nullptr: gaps stay without a box). Throws shle::Error otherwise.
