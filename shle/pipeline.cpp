@@ -183,7 +183,8 @@ SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource&
       if (tracker && after > static_cast<int>(i) + 1) {
         Clock::time_point t0 = Clock::now();
         try {
-          GrayImage g = to_gray(loader.load_image(f.image));
+          GrayImage g;
+          tracker->input_channel(loader.load_image(f.image), &g);
           tracking = tracker->init(view(g), r.box);
           if (!tracking) r.problems.push_back(f.image + ": the box cannot be tracked (too small or no texture)");
         } catch (const std::exception& e) {
@@ -194,7 +195,8 @@ SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource&
     } else if (tracking) {
       Clock::time_point t0 = Clock::now();
       try {
-        GrayImage g = to_gray(loader.load_image(f.image));
+        GrayImage g;
+        tracker->input_channel(loader.load_image(f.image), &g);
         Box b;
         if (tracker->update(view(g), &b)) {
           r.has_box = true;

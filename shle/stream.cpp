@@ -65,7 +65,7 @@ void StreamEstimator::after_box(const StreamInput& in, const Box& box, int index
   if (!tracker_) return;
   seed_problem_ = image_problem(in, index, "seed the tracker");
   if (!seed_problem_.empty()) return;
-  to_gray(*in.image, &seed_gray_);
+  tracker_->input_channel(*in.image, &seed_gray_);
   seed_ok_ = true;
 }
 
@@ -99,7 +99,7 @@ void StreamEstimator::track(const StreamInput& in, StreamFrame* out) {
     out->problems.push_back(bad);
     return;
   }
-  to_gray(*in.image, &gray_);
+  tracker_->input_channel(*in.image, &gray_);
   Box b;
   if (tracker_->update(view(gray_), &b)) {
     out->has_box = true;
