@@ -48,11 +48,25 @@ struct BevOptions {
   bool grid = true;          // range rings and axes
   double ring_step = 10.0;   // metres between range rings
   Rgb background{20, 20, 20};
+  // Fitted (render_bev_fitted): the stixels' opacity of the lines (dots are opaque).
+  double line_alpha = 0.9;
 };
 
 // Bird's-eye view: per stixel (far to near) a line from its 3D top point to its
 // bottom point and a 3x3 dot at the bottom point, in the lateral/forward plane.
 RgbImage render_bev(const StixelWorld& world, const Projection& projection,
                     const BevOptions& options = {});
+
+// pyStixel-lib's draw_stixels_birds_eye_view: the window fitted to the data (the
+// min/max of the selected stixels' top and bottom points on the lateral and
+// forward axes; lateral_range/forward_* and the grid are not used), each stixel
+// in world order a 2-px line top -> bottom at line_alpha (0.9: alpha 229) and an
+// opaque 3x3 dot at the bottom point on a transparent layer composited over the
+// background like Pillow; positions int(clip(n * (size - 1))) as theirs. The
+// lines are drawn by thickening a Bresenham line by one pixel, not by Pillow's
+// polygon filler, so single pixels along a line can differ from theirs. Cluster
+// colours as theirs: (t, 1 - |2t - 1|, 1 - t) with t = id / max id, noise grey 127.
+RgbImage render_bev_fitted(const StixelWorld& world, const Projection& projection,
+                           const BevOptions& options = {});
 
 }  // namespace stixel
