@@ -140,8 +140,9 @@ std::string head_ambiguity_warning(const weights::SafeTensors& st, const std::op
   if (head_layout(st) != nn::StixelHeadVariant::V1) return "";
   return st.source() +
          ": the head's tensors fit both V1 (column attention over the neighbouring columns) and V3 (attention over "
-         "all columns), and nothing says which: running as V1. Say which with --head v1 or --head v3, or once in "
-         "the file: weights/export.py FILE OUT --meta stixelnext.head=v1 (or v3)";
+         "all columns), and nothing says which: running as V1. Say which with --head v1 or --head v3 "
+         "(roadnn_model_params.stixel_head 1 or 3), or once in the file: weights/export.py FILE OUT "
+         "--meta stixelnext.head=v1 (or v3)";
 }
 
 }  // namespace stixel
