@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
   if (args.given("train-focal") && !has_calib) args.fail("--train-focal needs --calib or --calib-per-image");
   std::map<std::string, std::string> preset_md;
   if (!preset.empty() && !stixel::preset_metadata(preset, &preset_md)) args.fail("--preset must be waymo or coopscenes");
-  embed_image = !no_embed_image;
+  embed_image = !no_embed_image && format == "stx1";  // CSV and JSON exports carry no image
   int axis_a = 0, axis_b = 2;
   if (std::sscanf(cluster_axes.c_str(), "%d,%d", &axis_a, &axis_b) != 2 || axis_a < 0 || axis_a > 2 || axis_b < 0 ||
       axis_b > 2 || axis_a == axis_b)

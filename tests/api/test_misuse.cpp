@@ -782,7 +782,7 @@ TEST_F(ApiMisuseModels, StixelHeadAmbiguityAndContradiction) {
   const WeightFile bad("stixel_bad_head.safetensors", specs, 5, declared);
   roadnn_model* out = nullptr;
   const roadnn_model_params sp = params(ROADNN_MODEL_STIXELNEXT);
-  EXPECT_NE(roadnn_model_load_file(bad.path.c_str(), &sp, &out), ROADNN_OK);
+  EXPECT_EQ(roadnn_model_load_file(bad.path.c_str(), &sp, &out), ROADNN_ERROR_BAD_MODEL);
   EXPECT_EQ(out, nullptr);
   const std::string err = roadnn_last_error();
   EXPECT_NE(err.find("stixelnext.head=v4"), std::string::npos) << err;
