@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
   args.option("points", "FMT", "also write the 3D point cloud of pyStixel-lib's convert_to_point_cloud: "
               "<stem>_points.ply (binary: x y z float, colour, stixel index, cluster) or <stem>_points.csv "
               "(needs a calibration)", &points);
-  args.flag("cluster", "DBSCAN on the stixels' top points (eps 1.42 m, min_samples 2; needs --calib)", &cluster);
+  args.flag("cluster", "DBSCAN on the stixels' top points (eps 1.42 m, min_samples 2; needs a calibration)", &cluster);
   args.option("cluster-axes", "A,B", "the two 3D axes of the bird's-eye plane (default 0,2 = x,z for an optical-frame "
               "calibration; 0,1 for Waymo vehicle-frame K/T)", &cluster_axes);
   args.option("threads", "N", "threads (default: all cores)", &threads);

@@ -60,6 +60,23 @@ TEST_F(StixelnextUsers, PresetFileRunsWithoutFlagsLikeTheFlags) {
   ASSERT_EQ(run("--weights " + path("coopscenes.safetensors") + common), 0) << err_;
   EXPECT_EQ(slurp(path("out/img.csv")), by_flags);
   EXPECT_EQ(err_.find("warning"), std::string::npos) << err_;
+  // The same from a checkpoint as the authors' train.py saves it, {"model_state_dict": ...}
+  // with DDP's "module." prefix.
+  write_text("to_pth.py",
+             "import sys, torch\n"
+             "sys.path.insert(0, sys.argv[1] + '/weights')\n"
+             "import safetensors_io\n"
+             "t, _ = safetensors_io.load(sys.argv[2])\n"
+             "torch.save({'epoch': 3, 'model_state_dict': {'module.' + k: torch.from_numpy(v.copy()) "
+             "for k, v in t.items()}}, sys.argv[3])\n");
+  const std::string cmd = std::string(ROADNN_PYTHON) + " " + path("to_pth.py") + " " + ROADNN_SOURCE_DIR + " " +
+                          path("plain.safetensors") + " " + path("best.pth") + " >" + path("py.out") + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(path("py.out"));
+  ASSERT_EQ(python("weights/export.py " + path("best.pth") + " " + path("from_pth.safetensors") +
+                   " --preset coopscenes --meta stixelnext.head=v4"), 0) << py_;
+  ASSERT_EQ(run("--weights " + path("from_pth.safetensors") + common), 0) << err_;
+  EXPECT_EQ(slurp(path("out/img.csv")), by_flags);
+  EXPECT_EQ(err_.find("warning"), std::string::npos) << err_;
   ASSERT_EQ(run("--weights " + path("plain.safetensors") + " --preset coopscenes" + common), 0) << err_;
   EXPECT_EQ(slurp(path("out/img.csv")), by_flags);
   // The flags still win over the file's settings.
