@@ -13,6 +13,7 @@
 #include "nn/gemm_bf16.h"
 #include "nn/winograd.h"
 #include "stixel/anchors.h"
+#include "stixel/model_file.h"
 #include "weights/file_io.h"
 #include "weights/tensor_spec.h"
 
@@ -95,7 +96,8 @@ nn::Precision precision_of(const roadnn_model_params& p) {
 
 // The StixelNExT++ settings: the weights' metadata, then the caller's parameters.
 stixel::ModelSettings stixel_settings_of(const roadnn_model_params& p, const weights::SafeTensors& st) {
-  stixel::ModelSettings s = stixel::settings_from_metadata(st.metadata(), st.source());
+  // The file's metadata, its declared head checked against its tensors.
+  stixel::ModelSettings s = stixel::settings_from_weights(st);
   if (p.stixel_head != -1) {
     if (p.stixel_head < 0 || p.stixel_head > 4)
       fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.stixel_head must be -1 (detect) or 0..4");
@@ -171,6 +173,8 @@ std::unique_ptr<roadnn_model> load(const weights::SafeTensors& st, const roadnn_
     if (m->stixel_settings.anchors.size() != nn::StixelHead::kCandidates)
       fail(ROADNN_ERROR_INVALID_ARGUMENT, "the head predicts 64 candidates but the anchor set has " +
                                               std::to_string(m->stixel_settings.anchors.size()));
+    const std::string ambiguous = stixel::head_ambiguity_warning(st, m->stixel_settings.head);
+    if (!ambiguous.empty()) m->warnings.push_back(ambiguous);
     m->stixel_settings.head = model->head().variant();
     warn_unused(m.get(), st, model->used_tensors());
     m->weight_bytes = model->backbone().weight_bytes() + model->head().weight_bytes();

@@ -76,10 +76,12 @@ Anchors tangent_anchors(double start, double end, int n) {
   out.start = start;
   out.end = end;
   out.depth.resize(n);
+  out.exact.resize(n);
   for (int i = 0; i < n; ++i) {
     const double t = std::tan(linspace_at(0.0, a, n, i));
     // Same operation order as the reference (normalise, then scale, then shift).
     const double d = start + (t - t0) / (tmax - t0) * (end - start);
+    out.exact[i] = d;
     out.depth[i] = static_cast<float>(d);
   }
   check_depths(out, "tangent");
@@ -93,7 +95,11 @@ Anchors linear_anchors(double start, double end, int n) {
   out.start = start;
   out.end = end;
   out.depth.resize(n);
-  for (int i = 0; i < n; ++i) out.depth[i] = static_cast<float>(linspace_at(start, end, n, i));
+  out.exact.resize(n);
+  for (int i = 0; i < n; ++i) {
+    out.exact[i] = linspace_at(start, end, n, i);
+    out.depth[i] = static_cast<float>(out.exact[i]);
+  }
   check_depths(out, "linear");
   return out;
 }

@@ -12,8 +12,13 @@ struct Anchors {
   enum class Kind { Tangent, Linear };
   Kind kind = Kind::Tangent;
   double start = 4.0, end = 66.0;
-  std::vector<float> depth;  // depth[n], metres
+  std::vector<float> depth;  // depth[n], metres (what .stx1 files store)
+  // The same depths in double before the rounding, as the reference keeps them
+  // (numpy float64 tables); the depth-residual decoding starts from these. Empty
+  // for a hand-made set: then depth[] is used.
+  std::vector<double> exact;
   int size() const { return static_cast<int>(depth.size()); }
+  double exact_at(int n) const { return exact.size() == depth.size() ? exact[n] : depth[n]; }
 };
 
 // d_i = start + (tan(theta_i) - tan 0) / (tan(a) - tan 0) * (end - start),

@@ -54,6 +54,11 @@ void validate(int attrs, int candidates, int columns, const Anchors& anchors,
 
 }  // namespace
 
+double decode_depth_residual(double anchor, float d_res) {
+  // The reference's LOG_DEPTH_EPS guards the anchor (not the result).
+  return std::exp(std::log(std::max(anchor, 1e-6)) + static_cast<double>(d_res));
+}
+
 void extract_into(StixelWorld& out, const float* prediction, int attrs, int candidates,
                   int columns, const Anchors& anchors, const ExtractOptions& o) {
   validate(attrs, candidates, columns, anchors, o);
@@ -81,10 +86,9 @@ void extract_into(StixelWorld& out, const float* prediction, int attrs, int cand
       double d = anchors.depth[n];
       if (res) {
         if (!std::isfinite(res[i])) bad_value(attrs, 2, n, u, res[i]);
-        // The eps guard keeps depths positive whatever the residual.
-        d = std::max(d * std::exp(static_cast<double>(res[i])), 1e-6);
+        d = decode_depth_residual(anchors.exact_at(n), res[i]);
       }
-      d *= o.depth_scale;
+      if (o.depth_scale != 1.0) d *= o.depth_scale;
       s.d = static_cast<float>(d);
       if (!std::isfinite(s.d)) bad_value(attrs, 2, n, u, res ? res[i] : 0.0f);
       s.confidence = p;

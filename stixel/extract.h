@@ -23,10 +23,16 @@ struct ExtractOptions {
   double depth_scale = 1.0;
 };
 
+// The authors' depth decoding of a V4 candidate (StixelNExT_Pro
+// _decode_depth_residual): exp(log(max(anchor, 1e-6)) + d_res), all in double
+// from the float64 anchor, as numpy computes it. Rounded to float it equals the
+// reference's d bit for bit (a test compares on recorded network outputs).
+double decode_depth_residual(double anchor, float d_res);
+
 // Walks columns u (outer) and candidates n (inner), the reference's output order.
 // Emits u = column * width, vT = int(vT_hat * H + 1), vB = int(vB_hat * H + 1),
-// d = anchor_n (A = 3) or max(anchor_n * exp(d_res), 1e-6) (A = 4), times
-// depth_scale, confidence = P, width; label, idx and cluster stay 0. The rows are
+// d = anchor_n (A = 3) or decode_depth_residual(anchor_n, d_res) (A = 4) with the
+// anchors' double values (Anchors::exact_at), times depth_scale, confidence = P, width; label, idx and cluster stay 0. The rows are
 // computed exactly (the float32 value times the integer H, plus 1, in double: no
 // rounding), as the reference's numpy code does, then truncated toward zero.
 // Throws Error for invalid shapes/options and for a non-finite vT, vB or d_res

@@ -9,24 +9,9 @@
 #include "nn/layout.h"
 #include "nn/resize.h"
 #include "stixel/error.h"
+#include "stixel/model_file.h"
 
 namespace stixel {
-
-namespace {
-
-int metadata_int(const std::map<std::string, std::string>& md, const std::string& key, int fallback, int lo, int hi,
-                 const std::string& source) {
-  auto it = md.find(key);
-  if (it == md.end()) return fallback;
-  char* end = nullptr;
-  const long v = std::strtol(it->second.c_str(), &end, 10);
-  if (it->second.empty() || *end || v < lo || v > hi)
-    throw Error(source + ": metadata " + key + "=" + weights::quote_name(it->second) + " is not an integer in [" + std::to_string(lo) +
-                ", " + std::to_string(hi) + "]");
-  return static_cast<int>(v);
-}
-
-}  // namespace
 
 const char* normalization_name(Normalization n) {
   switch (n) {
@@ -48,20 +33,7 @@ bool parse_normalization(const std::string& text, Normalization* out) {
 
 ModelSettings settings_from_metadata(const std::map<std::string, std::string>& md, const std::string& source) {
   ModelSettings s;
-  s.input_height = metadata_int(md, "stixelnext.input_height", s.input_height, 32, 16384, source);
-  s.input_width = metadata_int(md, "stixelnext.input_width", s.input_width, 32, 16384, source);
-  s.stixel_width = metadata_int(md, "stixelnext.stixel_width", s.stixel_width, 1, 1024, source);
-  s.columns = metadata_int(md, "stixelnext.columns", 0, 1, 16384, source);
-  if (auto it = md.find("stixelnext.anchors"); it != md.end())
-    s.anchors = parse_anchor_spec(it->second, source + ": metadata stixelnext.anchors");
-  if (auto it = md.find("stixelnext.normalization"); it != md.end() && !parse_normalization(it->second, &s.normalization))
-    throw Error(source + ": metadata stixelnext.normalization=" + weights::quote_name(it->second) + " is not raw255, unit or imagenet");
-  if (auto it = md.find("stixelnext.head"); it != md.end()) {
-    nn::StixelHeadVariant v;
-    if (!nn::parse_stixel_head(it->second, &v))
-      throw Error(source + ": metadata stixelnext.head=" + weights::quote_name(it->second) + " is not one of v0..v4");
-    s.head = v;
-  }
+  apply_metadata(md, source, &s);
   return s;
 }
 

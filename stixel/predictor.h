@@ -7,6 +7,8 @@
 //   stixelnext.anchors        "tangent:4,66,64" (default) or "linear:START,END,N"
 //   stixelnext.normalization  raw255 (default, as trained), unit or imagenet
 //   stixelnext.head           v0..v4 to force a head variant (V1 and V3 look alike)
+// stixel/model_file.h reads them from a weights file (checking a declared head
+// against the tensors) and holds the named presets (waymo, coopscenes).
 #pragma once
 
 #include <cstddef>

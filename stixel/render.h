@@ -48,11 +48,26 @@ struct BevOptions {
   bool grid = true;          // range rings and axes
   double ring_step = 10.0;   // metres between range rings
   Rgb background{20, 20, 20};
+  // Fitted (render_bev_fitted): the stixels' opacity of the lines (dots are opaque).
+  double line_alpha = 0.9;
 };
 
 // Bird's-eye view: per stixel (far to near) a line from its 3D top point to its
 // bottom point and a 3x3 dot at the bottom point, in the lateral/forward plane.
 RgbImage render_bev(const StixelWorld& world, const Projection& projection,
                     const BevOptions& options = {});
+
+// pyStixel-lib's draw_stixels_birds_eye_view: the window fitted to the data (the
+// min/max of the selected stixels' top and bottom points on the lateral and
+// forward axes; lateral_range/forward_* and the grid are not used), each stixel
+// in world order a 2-px line top -> bottom at line_alpha (0.9: alpha 229) and an
+// opaque dot (Pillow's 3x3 ellipse: a plus) at the bottom point on a transparent
+// layer composited over the background, drawn as Pillow draws them (its wide-line
+// quad and scanline fill); positions int(clip(n * (size - 1))) as theirs. Cluster
+// colours as theirs: (t, 1 - |2t - 1|, 1 - t) with t = id / max id, noise grey 127.
+// One difference: pyStixel-lib projects the bottom points with a float32
+// inverse, we use the double one for both (a point moves by < 1e-5 m).
+RgbImage render_bev_fitted(const StixelWorld& world, const Projection& projection,
+                           const BevOptions& options = {});
 
 }  // namespace stixel

@@ -2,6 +2,7 @@
 #include <numeric>
 #include <string>
 
+#include "stixel/alpha_composite.h"
 #include "stixel/error.h"
 #include "stixel/render.h"
 
@@ -9,14 +10,6 @@ namespace stixel {
 namespace {
 
 std::int64_t floor_div2(std::int64_t x) { return x >= 0 ? x / 2 : -((-x + 1) / 2); }
-
-// PIL's ImagingAlphaComposite for an opaque destination (7 extra bits of
-// precision, rounded division by 255).
-inline std::uint8_t composite(std::uint32_t src, std::uint32_t dst, std::uint32_t coef1,
-                              std::uint32_t coef2) {
-  const std::uint32_t t = src * coef1 + dst * coef2 + (0x80u << 7);
-  return static_cast<std::uint8_t>((((t >> 8) + t) >> 8) >> 7);
-}
 
 }  // namespace
 
@@ -61,13 +54,11 @@ RgbImage render_overlay(const StixelWorld& world, const RgbImage& bg, const Over
   RgbImage out = bg;
   const std::uint32_t a = static_cast<std::uint32_t>(o.alpha * 255);
   if (a == 0) return out;
-  const std::uint32_t outa255 = a * 255 + 255 * (255 - a);
-  const std::uint32_t coef1 = a * 255 * 255 * (1u << 7) / outa255;
-  const std::uint32_t coef2 = 255 * (1u << 7) - coef1;
+  const PilComposite composite(a);
   for (std::size_t p = 0; p < drawn.size(); ++p) {
     if (!drawn[p]) continue;
     for (int k = 0; k < 3; ++k)
-      out.pixels[3 * p + k] = composite(layer[3 * p + k], bg.pixels[3 * p + k], coef1, coef2);
+      out.pixels[3 * p + k] = composite(layer[3 * p + k], bg.pixels[3 * p + k]);
   }
   return out;
 }

@@ -1,6 +1,11 @@
 #!/usr/bin/python3
 """Convert a PyTorch checkpoint into a safetensors file for roadnn.
 
+StixelNExT++ files describe themselves: --preset waymo|coopscenes and --meta
+stixelnext.KEY=VALUE write the settings stixelnext and the C API read from
+__metadata__ (stixel/predictor.h, stixel/model_file.h). A .safetensors file is
+accepted as CHECKPOINT too, to add or change metadata of an exported file.
+
 Runs with /usr/bin/python3 using torch and the standard library only (no
 `safetensors` package). Accepted checkpoint forms: a bare state_dict,
 {"model_state_dict": ...}, {"state_dict": ...}, {"model": ...} and a pickled
@@ -17,6 +22,23 @@ PROG = "export.py"
 TORCH_HINT = "install python3-torch (apt-get install python3-torch)"
 FORMAT = "roadnn-v1"
 RESERVED_METADATA = ("format", "source")
+# The published StixelNExT++ setups; stixel/model_file.cpp has the same table
+# (stixelnext_cli_tests compares the two).
+PRESETS = {
+    "waymo": {"stixelnext.input_height": "1280", "stixelnext.input_width": "1920",
+              "stixelnext.columns": "240", "stixelnext.stixel_width": "8",
+              "stixelnext.normalization": "raw255", "stixelnext.anchors": "tangent:4,66,64"},
+    "coopscenes": {"stixelnext.input_height": "1200", "stixelnext.input_width": "1920",
+                   "stixelnext.columns": "120", "stixelnext.stixel_width": "16",
+                   "stixelnext.normalization": "imagenet", "stixelnext.anchors": "tangent:4,66,64"},
+}
+STIXEL_KEYS = {
+    "stixelnext.head": ("v0", "v1", "v2", "v3", "v4"),
+    "stixelnext.normalization": ("raw255", "unit", "imagenet"),
+    "stixelnext.input_height": None, "stixelnext.input_width": None,
+    "stixelnext.columns": None, "stixelnext.stixel_width": None,
+    "stixelnext.anchors": None,
+}
 WRAPPER_KEYS = ("model_state_dict", "state_dict", "model")
 
 
@@ -34,10 +56,17 @@ def parse_args(argv):
         "you trust. Output metadata always has format=%s and source=<checkpoint file name>."
         % FORMAT,
     )
-    parser.add_argument("checkpoint", metavar="CHECKPOINT", help="PyTorch checkpoint (.pt/.pth)")
+    parser.add_argument("checkpoint", metavar="CHECKPOINT", help="PyTorch checkpoint (.pt/.pth), or a .safetensors file to re-export with new metadata")
     parser.add_argument("out", metavar="OUT.safetensors", help="output file (written atomically)")
-    parser.add_argument("--metadata", metavar="KEY=VALUE", nargs="+", action="extend", default=[],
-                        help="extra __metadata__ entries (repeatable)")
+    parser.add_argument("--meta", "--metadata", dest="metadata", metavar="KEY=VALUE", nargs="+",
+                        action="extend", default=[],
+                        help="extra __metadata__ entries (repeatable), e.g. stixelnext.head=v3; "
+                        "stixelnext.* keys: head (v0..v4), normalization (raw255, unit, imagenet), "
+                        "input_height, input_width, columns, stixel_width, anchors (tangent:4,66,64, "
+                        "linear:START,END,N); they override --preset")
+    parser.add_argument("--preset", choices=sorted(PRESETS),
+                        help="StixelNExT++ settings of a published setup: waymo (1280x1920, 240 columns of "
+                        "8 px, raw 0..255) or coopscenes (1200x1920, 120 columns of 16 px, ImageNet mean/std)")
     parser.add_argument("--dtype", choices=("f32", "f16", "bf16"), default="f32",
                         help="storage type of the float tensors (default: f32)")
     return parser.parse_args(argv)
@@ -53,8 +82,32 @@ def parse_metadata(items):
             raise ExportError(f"--metadata key '{key}' is reserved (set automatically)")
         if key in metadata:
             raise ExportError(f"--metadata key '{key}' given twice")
+        if key.startswith("stixelnext."):
+            check_stixel_key(key, value)
         metadata[key] = value
     return metadata
+
+
+def check_stixel_key(key, value):
+    """A typo in a stixelnext.* key or value would only show when the file runs."""
+    if key not in STIXEL_KEYS:
+        raise ExportError(f"--meta key '{key}' is not a stixelnext setting (known: "
+                          + ", ".join(sorted(STIXEL_KEYS)) + ")")
+    allowed = STIXEL_KEYS[key]
+    if allowed is not None and value not in allowed:
+        raise ExportError(f"--meta {key}={value!r}: expected one of " + ", ".join(allowed))
+    if key.endswith(("_height", "_width", "columns")) and not (value.isdigit() and int(value) > 0):
+        raise ExportError(f"--meta {key}={value!r}: expected a positive integer")
+    if key == "stixelnext.anchors" and not (value == "tangent" or value.startswith(("tangent:", "linear:"))):
+        raise ExportError(f"--meta {key}={value!r}: expected tangent, tangent:START,END,N or linear:START,END,N")
+
+
+def ambiguous_head(tensors, metadata):
+    """V1 and V3 heads have the same tensors: say so when nothing names the head."""
+    reduce = tensors.get("classifier.channel_reduce.weight")
+    query = tensors.get("classifier.attention_layer.query_layer.weight")
+    return ("stixelnext.head" not in metadata and reduce is not None and query is not None
+            and reduce.dim() == 4 and reduce.shape[1] == 2 * query.shape[1])
 
 
 def first_line(exc):
@@ -150,8 +203,22 @@ def select_tensors(torch, state, dtype, path):
     return tensors, skipped
 
 
+def load_safetensors(path):
+    """An exported file as input: its tensors (as torch) and its metadata."""
+    import safetensors_io
+    import torch
+    try:
+        arrays, metadata = safetensors_io.load(path)
+    except OSError as e:
+        raise ExportError(f"{path}: cannot read ({e.strerror or first_line(e)})") from e
+    except safetensors_io.SafetensorsError as e:
+        raise ExportError(str(e)) from e
+    return {k: torch.from_numpy(v.copy()) for k, v in arrays.items()}, metadata
+
+
 def export(args):
-    metadata = parse_metadata(args.metadata)
+    metadata = dict(PRESETS[args.preset]) if args.preset else {}
+    metadata.update(parse_metadata(args.metadata))
     try:
         import torch
     except ImportError as e:
@@ -162,14 +229,23 @@ def export(args):
     import safetensors_io
 
     dtype = {"f32": torch.float32, "f16": torch.float16, "bf16": torch.bfloat16}[args.dtype]
-    obj = load_checkpoint(torch, args.checkpoint)
-    state, form = find_state_dict(torch, obj, args.checkpoint)
+    if args.checkpoint.endswith(".safetensors"):
+        state, old = load_safetensors(args.checkpoint)
+        form = "safetensors (metadata kept, new keys over it)"
+        metadata = {**{k: v for k, v in old.items() if k not in RESERVED_METADATA}, **metadata}
+    else:
+        obj = load_checkpoint(torch, args.checkpoint)
+        state, form = find_state_dict(torch, obj, args.checkpoint)
     tensors, skipped = select_tensors(torch, state, dtype, args.checkpoint)
     if skipped:
         print(f"{PROG}: warning: skipped {len(skipped)} non-float tensor(s): " + ", ".join(skipped),
               file=sys.stderr)
     if not tensors:
         raise ExportError(f"{args.checkpoint}: no float tensors to export")
+    if ambiguous_head(tensors, metadata):
+        print(f"{PROG}: warning: the stixel head's tensors fit both V1 (attention over neighbouring columns) "
+              "and V3 (over all columns); add --meta stixelnext.head=v1 or v3 so that runs know which",
+              file=sys.stderr)
     metadata.update({"format": FORMAT, "source": os.path.basename(args.checkpoint)})
     try:
         safetensors_io.save(args.out, tensors, metadata)

@@ -906,6 +906,8 @@ Image decode(const std::uint8_t* data, std::size_t size, const std::string& name
   fail(name, "unsupported image format (expected PNG, JPEG or BMP)");
 }
 
+std::vector<std::uint8_t> read_image_file(const std::string& path) { return read_whole_file(path); }
+
 Image load(const std::string& path, int want_channels, bool keep_16bit, const DecodeLimits& limits) {
   if (want_channels < 0 || want_channels > 4)
     fail(path, "invalid channel count requested (" + std::to_string(want_channels) + ")");

@@ -55,6 +55,10 @@ Image load(const std::string& path, int want_channels = 0, bool keep_16bit = fal
 Image decode(const std::uint8_t* data, std::size_t size, const std::string& name,
              int want_channels, bool keep_16bit, const DecodeLimits& limits);
 
+// The file's bytes, read as load() reads them (regular files only, size limit):
+// for a caller that needs both the pixels (decode) and the encoded file.
+std::vector<std::uint8_t> read_image_file(const std::string& path);
+
 // The header only (reads the first bytes of the file, more only for JPEGs with large
 // metadata before the frame header). Throws Error("path: problem").
 ImageInfo probe(const std::string& path);

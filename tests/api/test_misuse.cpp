@@ -758,3 +758,33 @@ TEST(ApiLastError, IsPerThread) {
 }
 
 }  // namespace
+
+// Issue 14: a V1/V3-shaped StixelNExT++ file with nothing saying which head warns
+// (once, as a model warning); a declared head the tensors contradict fails to load.
+TEST_F(ApiMisuseModels, StixelHeadAmbiguityAndContradiction) {
+  auto specs = nn::convnext_tensor_specs(small_convnext(), "features.");
+  for (auto& s : nn::stixel_head_tensor_specs(nn::StixelHeadVariant::V1, 28, "classifier.")) specs.push_back(s);
+  const std::vector<std::pair<std::string, std::string>> size = {
+      {"stixelnext.input_height", std::to_string(kStixelH)}, {"stixelnext.input_width", std::to_string(kStixelW)}};
+  const WeightFile v13("stixel_v13.safetensors", specs, 5, size);
+  ModelPtr m = load_file(v13.path, params(ROADNN_MODEL_STIXELNEXT));
+  ASSERT_EQ(roadnn_model_warning_count(m.get()), 1u);
+  const std::string text = roadnn_model_warning(m.get(), 0);
+  EXPECT_TRUE(is_one_line(text.c_str()));
+  EXPECT_NE(text.find("V1"), std::string::npos) << text;
+  EXPECT_NE(text.find("V3"), std::string::npos) << text;
+  roadnn_model_params p = params(ROADNN_MODEL_STIXELNEXT);
+  p.stixel_head = 3;
+  EXPECT_EQ(roadnn_model_warning_count(load_file(v13.path, p).get()), 0u);
+
+  auto declared = size;
+  declared.push_back({"stixelnext.head", "v4"});
+  const WeightFile bad("stixel_bad_head.safetensors", specs, 5, declared);
+  roadnn_model* out = nullptr;
+  const roadnn_model_params sp = params(ROADNN_MODEL_STIXELNEXT);
+  EXPECT_EQ(roadnn_model_load_file(bad.path.c_str(), &sp, &out), ROADNN_ERROR_BAD_MODEL);
+  EXPECT_EQ(out, nullptr);
+  const std::string err = roadnn_last_error();
+  EXPECT_NE(err.find("stixelnext.head=v4"), std::string::npos) << err;
+  EXPECT_NE(err.find("classifier.local_mixing.depthwise.weight"), std::string::npos) << err;
+}

@@ -15,7 +15,13 @@ import stixel_refutil as ru
 np = ru.import_numpy()
 
 
-def revert(pred, anchors, img_height, prob, u_scale, eps=1e-6):
+def decode_depth_residual(d_res, anchor, eps=1e-6):
+    """The authors' decoding, in numpy float64 as they run it."""
+    anchor = max(float(anchor), eps)
+    return float(np.exp(np.log(anchor) + float(d_res)))
+
+
+def revert(pred, anchors, img_height, prob, u_scale):
     A = pred.shape[0]
     columns = np.transpose(pred, (2, 1, 0))  # "a n u -> u n a"
     rows = []
@@ -28,7 +34,7 @@ def revert(pred, anchors, img_height, prob, u_scale, eps=1e-6):
             vT = int(c[1] * img_height + 1)
             vB = int(c[0] * img_height + 1)
             if A == 4:
-                d = max(anchors[n] * np.exp(c[2]), eps)
+                d = decode_depth_residual(c[2], anchors[n])
             else:
                 d = anchors[n]
             rows.append((u * u_scale, vT, vB, np.float32(d), np.float32(p), n))
@@ -53,6 +59,7 @@ def case(name, A, U, H, width, prob, anchors, seed, out):
     ru.save("%s/stixel_extract_%s.safetensors" % (out, name), {
         "prediction": pred,
         "anchors": anchors.astype(np.float32),
+        "anchors_f64": anchors,
         "u_vT_vB": out_rows,
         "d": np.array([r[3] for r in rows], dtype=np.float32),
         "confidence": np.array([r[4] for r in rows], dtype=np.float32),

@@ -4,6 +4,7 @@ feature rows -> stixel head) for every head variant, written from the reference
 specification (../shared/reference/stixelnext.md §1.3). Writes into --out:
   stixel_<variant>_weights.safetensors   features.* + classifier.* state_dict
   stixel_case_<variant>_<size>.safetensors   'input' [1,3,H,W], 'expected' [1,A,64,U]
+                                             (v4 also 'authors_d' [64,U]: see authors_depths)
 Variants: v4 (latest), v1 (local column attention), v3 (global), v2 (attention unused),
 v0 (plain reduce). Sizes: fullhd (1280x1920, U = 240) and small (256x640, U = 80)."""
 import sys
@@ -94,6 +95,23 @@ def make_heads(torch):
     return HeadV0V3, HeadV4
 
 
+def authors_depths(np, prediction):
+    """StixelNExT_Pro's revert_class depth of every candidate of a recorded V4
+    prediction [A, 64, U]: its tangent create_depth_bins (4, 66, 64) table in
+    float64, then _decode_depth_residual, float(exp(log(max(anchor, 1e-6)) +
+    float(d_res))) on numpy float64 scalars, stored as float32 by protobuf."""
+    lin = np.linspace(0, np.pi / 2.72, 64)
+    t = np.tan(lin)
+    anchors = 4 + (t - t.min()) / (t.max() - t.min()) * (66 - 4)
+    pred = prediction.numpy()
+    d = np.empty(pred.shape[1:], dtype=np.float32)
+    for n in range(pred.shape[1]):
+        anchor = max(float(anchors[n]), 1e-6)
+        for u in range(pred.shape[2]):
+            d[n, u] = np.float32(float(np.exp(np.log(anchor) + float(pred[2, n, u]))))
+    return d
+
+
 def main():
     out, only = refcommon.out_dir(sys.argv[1:])
     torch = refcommon.import_torch()
@@ -124,7 +142,11 @@ def main():
             sd = {f"features.{k}": v for k, v in backbone.features.state_dict().items()}
             sd.update({f"classifier.{k}": v for k, v in head.state_dict().items()})
             refcommon.save(f"{out}/stixel_{variant}_weights.safetensors", sd)
-            refcommon.save(f"{out}/stixel_case_{name}.safetensors", {"input": x, "expected": y})
+            case = {"input": x, "expected": y}
+            if variant == "v4":
+                import numpy as np
+                case["authors_d"] = torch.from_numpy(authors_depths(np, y[0]))
+            refcommon.save(f"{out}/stixel_case_{name}.safetensors", case)
             print(f"{name}: {list(x.shape)} -> {list(y.shape)}")
 
 

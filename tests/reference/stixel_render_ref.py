@@ -73,6 +73,62 @@ def draw(img, stixels, clusters, alpha, prob, instances, luts):
     return np.array(Image.alpha_composite(image, overlay).convert("RGB"))
 
 
+def bev_points(K, us, vs, ds):
+    """pyStixel-lib's convert_to_3d_stixel: float32 [u, v, d, 1] rows, u and v
+    times d in float32, inverse(K4) in float64 (T = I). Its bottom points
+    (_project_uvd_to_xyz) use a float32 inverse; both use float64 here, as ours."""
+    m = np.ones((len(us), 4), dtype=np.float32)
+    m[:, 0], m[:, 1], m[:, 2] = us, vs, ds
+    m[:, :2] *= m[:, 2:3]
+    k = np.eye(4)
+    k[:3, :3] = np.array(K, dtype=np.float32).astype(np.float64).reshape(3, 3)
+    return (np.linalg.inv(k) @ m.T).T[:, :3]
+
+
+def draw_bev(stixels, K, size, alpha, prob, coloring, luts):
+    """pyStixel-lib's draw_stixels_birds_eye_view (x/z plane), with Pillow."""
+    width, height = size
+    sel = [i for i, s in enumerate(stixels) if float(s["confidence"]) >= float(prob)]
+    us = [s["u"] for s in stixels]
+    top = bev_points(K, us, [s["vT"] for s in stixels], [s["d"] for s in stixels])[sel][:, [0, 2]]
+    bottom = bev_points(K, us, [s["vB"] for s in stixels], [s["d"] for s in stixels])[sel][:, [0, 2]]
+    x_all = np.concatenate([top[:, 0], bottom[:, 0]])
+    z_all = np.concatenate([top[:, 1], bottom[:, 1]])
+    x_min, x_max = float(np.nanmin(x_all)), float(np.nanmax(x_all))
+    z_min, z_max = float(np.nanmin(z_all)), float(np.nanmax(z_all))
+
+    def to_px(x, z):
+        xn = (x - x_min) / (x_max - x_min)
+        zn = (z - z_min) / (z_max - z_min)
+        return (int(np.clip(xn * (width - 1), 0, width - 1)), int(np.clip((1.0 - zn) * (height - 1), 0, height - 1)))
+
+    image = Image.new("RGBA", (width, height), (20, 20, 20, 255))
+    overlay = Image.new("RGBA", (width, height), (0, 0, 0, 0))
+    d = ImageDraw.Draw(overlay)
+    valid = [stixels[i]["cluster"] for i in sel if stixels[i]["cluster"] >= 0]
+    max_cluster = max(valid) if valid else 1
+    for k, i in enumerate(sel):
+        s = stixels[i]
+        if coloring == "cluster":
+            cid = s["cluster"]
+            if cid < 0:
+                rgb = (0.5, 0.5, 0.5)
+            else:
+                denom = max(1, max_cluster)
+                t = float(cid % (denom + 1)) / float(denom)
+                rgb = (t, 1.0 - abs(2.0 * t - 1.0), 1.0 - t)
+            color = tuple(int(c * 255) for c in rgb)
+        elif coloring == "confidence":
+            conf = float(np.clip(s["confidence"], 0.0, 1.0))
+            color = (int((1.0 - conf) * 255.0), int(conf * 255.0), 0)
+        else:
+            color = colormap(luts["rdylgn"], (s["d"] - 5.0) / (50.0 - 5.0))
+        pt, pb = to_px(*top[k]), to_px(*bottom[k])
+        d.line((pt[0], pt[1], pb[0], pb[1]), fill=color + (int(alpha * 255),), width=2)
+        d.ellipse((pb[0] - 1, pb[1] - 1, pb[0] + 1, pb[1] + 1), fill=color + (255,))
+    return np.array(Image.alpha_composite(image, overlay).convert("RGB"))
+
+
 def main(argv):
     a = ru.args(argv)
     rng = np.random.default_rng(21)
@@ -98,7 +154,25 @@ def main(argv):
         "overlay_depth": draw(img, stixels, clusters, 0.5, 0.5, False, luts),
         "overlay_clusters": draw(img, stixels, clusters, 0.7, 0.2, True, luts),
     }, {"clusters": clusters})
-    print("stixel overlay references written")
+    # Fitted bird's-eye views of an optical-frame world (standard K, T = I).
+    m = 400
+    K = [700.0, 0.0, 320.0, 0.0, 700.0, 200.0, 0.0, 0.0, 1.0]
+    bu = rng.integers(0, 640, m).astype(np.int32)
+    bvT = rng.integers(0, 400, m).astype(np.int32)
+    bvB = (bvT + rng.integers(-5, 120, m)).astype(np.int32)
+    bd = rng.uniform(4.0, 60.0, m).astype(np.float32)
+    bconf = rng.random(m, dtype=np.float32)
+    bcluster = rng.integers(-1, 7, m).astype(np.int32)
+    bst = [dict(u=int(bu[i]), vT=int(bvT[i]), vB=int(bvB[i]), d=float(bd[i]), width=8,
+                confidence=float(bconf[i]), cluster=int(bcluster[i])) for i in range(m)]
+    ru.save(a.out + "/stixel_bev_fitted.safetensors", {
+        "K": np.array(K, dtype=np.float32), "u": bu, "vT": bvT, "vB": bvB, "d": bd,
+        "width": np.full(m, 8, dtype=np.int32), "confidence": bconf, "cluster": bcluster,
+        "bev_depth": draw_bev(bst, K, (300, 260), 0.9, 0.5, "depth", luts),
+        "bev_cluster": draw_bev(bst, K, (300, 260), 0.9, 0.2, "cluster", luts),
+        "bev_confidence": draw_bev(bst, K, (256, 256), 0.9, 0.0, "confidence", luts),
+    })
+    print("stixel overlay and bird's-eye-view references written")
 
 
 if __name__ == "__main__":

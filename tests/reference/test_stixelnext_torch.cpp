@@ -165,4 +165,34 @@ TEST(StixelNExTTorch, ExtractionV4ThresholdMatchesTorch) { check_extraction("v4"
 TEST(StixelNExTTorch, ExtractionV1MatchesTorch) { check_extraction("v1", 0.36); }
 TEST(StixelNExTTorch, ExtractionV0MatchesTorch) { check_extraction("v0", 0.36); }
 
+// Issue 14 item 5: on the recorded network output (PyTorch's V4 prediction of the
+// same image), every candidate's d is the authors' decoding bit for bit
+// (numpy float64 exp(log(anchor) + d_res), computed by stixel_head_ref.py).
+void check_authors_depths(const std::string& size, int H, int U) {
+  weights::SafeTensors c = reftest::load_ref("stixel_case_v4_" + size + ".safetensors");
+  const auto prediction = c.f32("expected");
+  const auto authors = c.f32("authors_d");
+  ASSERT_EQ(authors.size(), static_cast<std::size_t>(64) * U);
+  stixel::ExtractOptions opt;
+  opt.threshold = 0;  // revert_class keeps every candidate
+  opt.image_height = H;
+  const auto s = stixel::extract(prediction.data(), 4, 64, U, stixel::tangent_anchors(), opt).stixels;
+  ASSERT_EQ(s.size(), authors.size());
+  std::size_t k = 0, differ = 0;
+  for (int col = 0; col < U; ++col)
+    for (int cand = 0; cand < 64; ++cand, ++k) {
+      const float want = authors[static_cast<std::size_t>(cand) * U + col];
+      if (std::memcmp(&s[k].d, &want, sizeof(float)) != 0) {
+        ++differ;
+        ADD_FAILURE() << size << " column " << col << " candidate " << cand << ": d " << s[k].d << " vs the authors' "
+                      << want;
+      }
+      if (differ > 10) return;
+    }
+  EXPECT_EQ(differ, 0u);
+}
+
+TEST(StixelNExTTorch, DepthIsTheAuthorsDecodingBitForBitSmall) { check_authors_depths("small", 256, 80); }
+TEST(StixelNExTTorch, DepthIsTheAuthorsDecodingBitForBitFullHd) { check_authors_depths("fullhd", 1280, 240); }
+
 }  // namespace

@@ -45,3 +45,43 @@ TEST(RenderRef, ClusterOverlayMatchesPillow) {
   o.color_by_cluster = true;
   check("overlay_clusters", o);
 }
+
+// pyStixel-lib's draw_stixels_birds_eye_view drawn with Pillow (window fitted to the
+// data, 2-px lines at alpha 0.9, 3x3 ellipse dots): render_bev_fitted, pixel for pixel.
+namespace {
+
+void check_bev(const std::string& tensor, int width, int height, double prob, stixel::BevOptions::Color color) {
+  const auto st = stxref::load("stixel_bev_fitted.safetensors");
+  stixel::StixelWorld w;
+  w.stixels = stxref::stixels(st);
+  const stixel::Projection proj(st.f32("K"), {});
+  stixel::BevOptions o;
+  o.width = width;
+  o.height = height;
+  o.min_confidence = prob;
+  o.color = color;
+  const stixel::RgbImage out = stixel::render_bev_fitted(w, proj, o);
+  const std::vector<std::uint8_t> ref = stxref::u8(st, tensor);
+  ASSERT_EQ(out.pixels.size(), ref.size());
+  int mismatches = 0, drawn = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    drawn += ref[i] != 20;
+    if (out.pixels[i] != ref[i] && mismatches++ < 5)
+      ADD_FAILURE() << tensor << ": pixel " << i / 3 % width << "," << i / 3 / width << " channel " << i % 3
+                    << ": ours " << int(out.pixels[i]) << ", Pillow " << int(ref[i]);
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(drawn, 1500);  // the picture really has stixels on it
+}
+
+}  // namespace
+
+TEST(RenderRef, FittedBevByDepthMatchesPillow) {
+  check_bev("bev_depth", 300, 260, 0.5, stixel::BevOptions::Color::Depth);
+}
+TEST(RenderRef, FittedBevByClusterMatchesPillow) {
+  check_bev("bev_cluster", 300, 260, 0.2, stixel::BevOptions::Color::Cluster);
+}
+TEST(RenderRef, FittedBevByConfidenceMatchesPillow) {
+  check_bev("bev_confidence", 256, 256, 0.0, stixel::BevOptions::Color::Confidence);
+}

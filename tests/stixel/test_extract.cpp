@@ -104,18 +104,22 @@ TEST(Extract, FourAttributesDecodeResidualDepth) {
   o.threshold = 0.5;
   stixel::StixelWorld w = stixel::extract(p.v.data(), 4, 2, 1, a, o);
   ASSERT_EQ(w.stixels.size(), 2u);
-  EXPECT_EQ(w.stixels[0].d, static_cast<float>(10.0 * std::exp(static_cast<double>(0.1f))));
+  // The authors' decoding: exp(log(anchor) + d_res) in double.
+  EXPECT_EQ(w.stixels[0].d, static_cast<float>(std::exp(std::log(10.0) + static_cast<double>(0.1f))));
+  EXPECT_EQ(stixel::decode_depth_residual(10.0, 0.1f), std::exp(std::log(10.0) + static_cast<double>(0.1f)));
   EXPECT_EQ(w.stixels[1].d, 20.0f);
   EXPECT_EQ(w.stixels[0].confidence, 0.8f);
   // Focal adaptation scales every depth.
   o.depth_scale = 0.5;
   w = stixel::extract(p.v.data(), 4, 2, 1, a, o);
   EXPECT_EQ(w.stixels[1].d, 10.0f);
-  // A huge negative residual is guarded to a tiny positive depth.
+  // A huge negative residual gives 0 as in the reference, whose eps guards the
+  // anchor (log of it), not the result.
   p.at(2, 0, 0) = -1e4f;
   o.depth_scale = 1.0;
   w = stixel::extract(p.v.data(), 4, 2, 1, a, o);
-  EXPECT_EQ(w.stixels[0].d, 1e-6f);
+  EXPECT_EQ(w.stixels[0].d, 0.0f);
+  EXPECT_DOUBLE_EQ(stixel::decode_depth_residual(0.0, 0.0f), 1e-6);
 }
 
 TEST(Extract, CustomWidthAndHeight) {

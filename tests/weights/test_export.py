@@ -161,6 +161,41 @@ def main():
                 want = v.to(torch.bfloat16).float().numpy()
                 check(np.array_equal(tensors[k], want), f"bf16 {k} values")
 
+    # Issue 14: --preset and --meta write the stixelnext.* settings; --meta wins over the
+    # preset; a .safetensors input is re-exported with its metadata plus the new keys.
+    tensors, meta, _ = export_ok("preset", state, "--preset", "coopscenes", "--meta", "stixelnext.head=v1")
+    if tensors is not None:
+        want = {"stixelnext.input_height": "1200", "stixelnext.input_width": "1920", "stixelnext.columns": "120",
+                "stixelnext.stixel_width": "16", "stixelnext.normalization": "imagenet",
+                "stixelnext.anchors": "tangent:4,66,64", "stixelnext.head": "v1"}
+        check(all(meta.get(k) == v for k, v in want.items()), f"preset metadata {meta}")
+    _, meta, _ = export_ok("preset_override", state, "--preset", "waymo", "--meta", "stixelnext.columns=120")
+    if meta is not None:
+        check(meta.get("stixelnext.columns") == "120" and meta.get("stixelnext.input_height") == "1280",
+              f"--meta over --preset: {meta}")
+    again = os.path.join(work, "again.safetensors")
+    r = run_export(os.path.join(work, "preset.safetensors"), again, "--meta", "stixelnext.head=v3")
+    check(r.returncode == 0, f"safetensors input: {r.stderr!r}")
+    if r.returncode == 0:
+        t2, m2 = safetensors_io.load(again)
+        check(m2.get("stixelnext.head") == "v3" and m2.get("stixelnext.columns") == "120" and
+              m2.get("source") == "preset.safetensors", f"re-exported metadata {m2}")
+        check(sorted(t2) == sorted(expected), "re-exported tensors")
+    # V1/V3-shaped heads without a declared head: a warning naming both and the fix.
+    heads = {"classifier.attention_layer.query_layer.weight": torch.zeros(4, 4),
+             "classifier.channel_reduce.weight": torch.zeros(192, 8, 1, 1)}
+    def saved_heads(name):
+        p = os.path.join(work, name + ".pt")
+        torch.save(heads, p)
+        return p
+
+    r = run_export(saved_heads("v1v3"), os.path.join(work, "v1v3.safetensors"))
+    check(r.returncode == 0 and "V1" in r.stderr and "V3" in r.stderr and "stixelnext.head=v1" in r.stderr,
+          f"V1/V3 warning: {r.stderr!r}")
+    r = run_export(saved_heads("v1v3_named"), os.path.join(work, "v1v3_named.safetensors"),
+                   "--meta", "stixelnext.head=v3")
+    check(r.returncode == 0 and "warning" not in r.stderr, f"declared head still warns: {r.stderr!r}")
+
     # Errors: exit 1, one line on stderr starting with the program name, no output file.
     def export_fails(name, ckpt, fragment, *extra, out=None, separate_process=False):
         out = out or os.path.join(work, name + ".safetensors")
@@ -199,6 +234,12 @@ def main():
                  "'big' has values outside the range of float16", "--dtype", "f16")
     export_fails("reserved", saved("reserved", state), "'format' is reserved", "--metadata", "format=x")
     export_fails("bad_metadata", saved("bad_metadata", state), "expects KEY=VALUE", "--metadata", "oops")
+    export_fails("bad_head", saved("bad_head", state), "expected one of v0, v1, v2, v3, v4",
+                 "--meta", "stixelnext.head=v5")
+    export_fails("unknown_key", saved("unknown_key", state), "is not a stixelnext setting",
+                 "--meta", "stixelnext.colums=240")
+    export_fails("bad_int", saved("bad_int", state), "expected a positive integer",
+                 "--meta", "stixelnext.columns=-3")
     export_fails("unwritable", saved("unwritable", state), "cannot write",
                  out=os.path.join(work, "no_dir", "x.safetensors"))
     check(not os.path.exists(os.path.join(work, "no_dir")), "unwritable: directory created")
