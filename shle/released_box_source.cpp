@@ -6,6 +6,7 @@
 
 #include "shle/error.h"
 #include "shle/released_boxes.h"
+#include "weights/quote_name.h"
 
 namespace shle {
 namespace {
@@ -83,7 +84,8 @@ CocoResultsSource::CocoResultsSource(const std::string& results, const std::stri
     for (const auto& [id, name] : load_coco_images(images_json)) {
       auto f = frame_of_name.find(name);
       if (f == frame_of_name.end())
-        throw Error(images_json + ": image " + name + " (id " + std::to_string(id) + ") is not in " + seq.dir);
+        throw Error(images_json + ": image " + weights::quote_name(name) + " (id " + std::to_string(id) +
+                    ") is not in " + seq.dir);
       frame_of_id.emplace(id, f->second);
     }
   }

@@ -8,6 +8,7 @@
 #include "shle/error.h"
 #include "shle/file_read.h"
 #include "weights/json.h"
+#include "weights/quote_name.h"
 
 namespace shle {
 namespace {
@@ -30,7 +31,7 @@ std::int64_t integer(const json::Value* v, const std::string& where, const char*
   if (!v || !v->is_number()) throw Error(where + ": no integer \"" + what + "\"");
   const double d = v->number();
   if (!std::isfinite(d) || d != std::floor(d) || d < lo || d > 9007199254740992.0)
-    throw Error(where + ": \"" + what + "\" " + v->number_text() + " is not an integer >= " + fmt(lo));
+    throw Error(where + ": \"" + what + "\" " + fmt(d) + " is not an integer >= " + fmt(lo));
   return static_cast<std::int64_t>(d);
 }
 
@@ -78,7 +79,7 @@ Box parse_released_stage1(const json::Value& root, const std::string& source, in
   const json::Value* label = s.get("label");
   if (!label || !label->is_string()) throw Error(where + " has no string \"label\"");
   if (label->str() != "height")
-    throw Error(where + " is labelled \"" + label->str() + "\"; the released stage 1 writes \"height\"");
+    throw Error(where + " is labelled " + weights::quote_name(label->str()) + "; the released stage 1 writes \"height\"");
   const json::Value* pts = s.get("points");
   if (!pts || !pts->is_array()) throw Error(where + " has no \"points\" array");
   if (pts->array().size() != 2)

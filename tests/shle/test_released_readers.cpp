@@ -56,7 +56,7 @@ TEST(ReleasedStage1, Malformed) {
       "2 shapes");
   bad(R"({"shapes": [3]})", "shape 0 is not an object");
   bad(R"({"shapes": [{"points": [[1, 2], [3, 4]]}]})", "no string \"label\"");
-  bad(R"({"shapes": [{"label": "car", "points": [[1, 2], [3, 4]]}]})", "labelled \"car\"");
+  bad(R"({"shapes": [{"label": "car", "points": [[1, 2], [3, 4]]}]})", "labelled 'car'");
   bad(R"({"shapes": [{"label": "height"}]})", "no \"points\" array");
   // Wrong shape of points.
   bad(stage1("[[1, 2]]"), "has 1 points");
@@ -229,7 +229,7 @@ TEST(CocoResults, SourceMapsIdsAndChecksBounds) {
                    "image_id 2 is not in");
   write_text(t.dir / "i2.json", R"({"images": [{"id": 2, "file_name": "other.png"}]})");
   EXPECT_THROW_MSG(shle::CocoResultsSource(t.dir / "r2.json", t.dir / "i2.json", t.seq, t.sizes),
-                   "image other.png (id 2) is not in");
+                   "image 'other.png' (id 2) is not in");
   // Boxes outside the image (detectron2 clips to it): a wrong file or sequence.
   write_text(t.dir / "r3.json", R"([{"image_id": 1, "category_id": 1, "bbox": [1000, 20, 300, 40], "score": 0.8}])");
   EXPECT_THROW_MSG(shle::CocoResultsSource(t.dir / "r3.json", "sorted", t.seq, t.sizes),
