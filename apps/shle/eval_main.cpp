@@ -212,6 +212,9 @@ int main(int argc, char** argv) {
     }
   }
   if (!positional.empty()) p.fail("unexpected argument '" + positional.front() + "'");
+  for (const char* o : {"boxes", "boxes-dir", "coco-images-dir", "gt-heights", "gt-height", "scenes", "box-rule", "tracker",
+                        "gate-with-annotations", "kalman-compat", "no-kalman", "csv", "json", "quiet"})
+    if (p.given(o)) p.fail(std::string("--") + o + " applies to --dataset, not to --benchmark");
   try {
     std::vector<BenchScene> scenes = read_listing(root);
 

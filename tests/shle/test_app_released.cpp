@@ -176,6 +176,9 @@ TEST(ShleEvalDataset, Errors) {
   EXPECT_EQ(r.code, 2);
   r = eval("--dataset disparity-height '" + dataset() + "' --benchmark x");
   EXPECT_EQ(r.code, 2);
+  r = eval("--benchmark '" + (t / "bm") + "' --csv x.csv");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--csv applies to --dataset"), std::string::npos) << r.err;
   r = eval("--dataset disparity-height '" + (t / "none") + "'");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("none: no such dataset folder"), std::string::npos) << r.err;

@@ -14,6 +14,7 @@
 #include "shle/released_box_source.h"
 #include "shle/released_boxes.h"
 #include "shle/released_gate.h"
+#include "shle/stream.h"
 #include "tests/shle/test_util.h"
 #include "weights/json.h"
 
@@ -259,6 +260,12 @@ TEST(ReleasedGate, IouAndDistanceRule) {
   // edge: a box left of the device ending near it is kept, one right of it is not.
   EXPECT_FALSE(shle::released_gate({1000, 285, 1270, 315}, gt));
   EXPECT_FALSE(shle::released_gate({20, 600, 1220, 710}, gt));
+}
+
+TEST(ReleasedGate, StreamRefusesIt) {
+  shle::PipelineOptions o;
+  o.gate_with_annotations = true;
+  EXPECT_THROW_MSG(shle::StreamEstimator(shle::Calibration{}, o), "gate_with_annotations needs the LabelMe annotations");
 }
 
 TEST(DisparityHeight, ScansScenes) {
