@@ -134,9 +134,9 @@ int main(int argc, char** argv) {
            &dataset);
   p.positionals("ROOT", "the dataset root after --dataset disparity-height", &positional);
   p.option("boxes", "SRC",
-           "dataset: annotations (default), released-stage1 (--boxes-dir holds images_0XX/ folders of\n"
-           "      [[x, y], [w, h]] files, the released tracking_mil_json) or coco-results (--boxes-dir holds\n"
-           "      coco_instances_images0XX_results.json)",
+           "dataset: annotations (default), released-stage1 (--boxes-dir holds images_0XX/ folders of "
+           "[[x, y], [w, h]] files, the released tracking_mil_json) or coco-results (--boxes-dir holds "
+           "coco_instances_images0XX_results.json)",
            &dopt.boxes);
   p.option("boxes-dir", "DIR", "dataset: folder of the released-stage1 / coco-results box files", &dopt.boxes_dir);
   p.option("coco-images-dir", "DIR|sorted",
