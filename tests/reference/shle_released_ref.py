@@ -128,12 +128,12 @@ def write_inputs(scene_dir, out_dir, seed):
     records = []  # (frame, x, y, w, h, score)
     for fr, x0, y0, x1, y1, sc in read_detections(os.path.join(scene_dir, "detections.csv")):
         records.append((fr, f32(x0), f32(y0), f32(x1 - x0), f32(y1 - y0), sc))
-    # Distractors for the gate: frame 1 a wide box low in the image (widest, fails
-    # the gate); frame 2 a box left of the device ending within 200 px of its left
+    # Distractors for the gate: frame 1 a wide box across the buildings above the
+    # device (widest; it has a height, far too high, and fails the gate); frame 2 a box left of the device ending within 200 px of its left
     # edge, top within 20 px (passes the gate by distance, not by IoU), plus a
     # wider box with score exactly 0.3 (not > 0.3: must be ignored).
     g1 = gt_box(frames[1][1])
-    records.append((1, f32(20.0), f32(600.0), f32(1200.0), f32(110.0), 0.61))
+    records.append((1, f32(20.0), f32(30.0), f32(1200.0), f32(60.0), 0.61))
     g2 = gt_box(frames[2][1])
     x_left = max(0.0, g2[0] - 420.0)
     if g2[0] - 60.0 - x_left >= 10.0:  # room left of the device
