@@ -32,7 +32,9 @@ class BoxSource {
 };
 
 // LabelMe rectangles labelled "height" next to each image, score 1. A frame
-// without an annotation file has no candidate.
+// without an annotation file has no candidate. A file with the released stage-1
+// writer's exact layout (its points are [x, y], [w, h]) is refused for its frame
+// rather than read as corners (load_labelme).
 class AnnotationBoxSource : public BoxSource {
  public:
   std::string name() const override { return "annotations"; }

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "shle/error.h"
+#include "shle/released_boxes.h"
 #include "weights/json.h"
 
 namespace shle {
@@ -65,6 +66,10 @@ LabelmeFile load_labelme(const std::string& path, const std::string& label) {
   } catch (const json::Error& e) {
     throw Error(e.what());
   }
+  // Same JSON shape, different meaning: never read [[x, y], [w, h]] as corners.
+  if (has_released_stage1_layout(root))
+    throw Error(path + ": has the released stage-1 writer's layout (points [[x, y], [w, h]], no imageData, no "
+                "group_id); read such files with --boxes released-stage1 DIR");
   return parse_labelme(root, path, label);
 }
 

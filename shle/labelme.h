@@ -26,6 +26,9 @@ struct LabelmeFile {
 // "<source>: <problem>".
 LabelmeFile parse_labelme(const json::Value& root, const std::string& source,
                           const std::string& label = "height");
+// Also refuses a file with the released stage-1 writer's exact layout
+// (has_released_stage1_layout in released_boxes.h): its points are [x, y], [w, h],
+// and reading them as corners gives wrong boxes without a word.
 LabelmeFile load_labelme(const std::string& path, const std::string& label = "height");
 
 // A LabelMe file with one rectangle per box (used by the synthetic generator).

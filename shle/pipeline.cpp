@@ -8,6 +8,7 @@
 #include "shle/disparity_io.h"
 #include "shle/error.h"
 #include "shle/labelme.h"
+#include "shle/released_gate.h"
 
 namespace shle {
 namespace {
@@ -213,8 +214,21 @@ SequenceRun run_sequence(const Sequence& seq, const Calibration& cal, BoxSource&
       if (i + 1 < n && run.frames[i + 1].has_box) tracking = false;
     }
 
-    if (r.has_box) {
-      ++run.frames_with_box;
+    if (r.has_box) ++run.frames_with_box;
+    if (r.has_box && opt.gate_with_annotations) {
+      if (!r.has_gt_box)
+        r.problems.push_back(f.image_name + ": gated out: no annotation box to gate against (--gate-with-annotations)");
+      else if (!released_gate(r.box, r.gt_box))
+        r.problems.push_back(f.image_name + ": gated out: the box does not hit the annotation box (--gate-with-annotations)");
+      r.gated_out = !r.has_gt_box || !released_gate(r.box, r.gt_box);
+      if (r.gated_out) {
+        ++run.frames_gated_out;
+        const HeightOptions& h = opt.height;
+        r.stage2.window = extend_and_clip(r.box, h.extend_top, h.extend_bottom, width[i], height[i]);
+        r.stage2.problem = "gated out";
+      }
+    }
+    if (r.has_box && !r.gated_out) {
       Clock::time_point t0 = Clock::now();
       DisparityMap disp;
       bool have_disp = false;

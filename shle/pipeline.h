@@ -38,6 +38,11 @@ struct PipelineOptions {
   // last box, 0 = no limit. run_sequence ignores it: it tracks only through gaps
   // between two boxes, however long.
   int max_track_frames = 30;
+  // The released stage-2 frame gate (shle/released_gate.h): a frame whose box
+  // does not hit its LabelMe annotation box, or that has none, gets no height.
+  // Uses the ground truth; off by default. run_sequence only (StreamEstimator
+  // has no annotations and refuses it).
+  bool gate_with_annotations = false;
   bool has_gt_height = false;
   double gt_height = 0;
 };
@@ -67,6 +72,7 @@ struct FrameRecord {
   std::string image_name;
   std::string box_source;  // the source's name, "tracker", or "" without a box
   bool has_box = false;
+  bool gated_out = false;  // has a box, refused by gate_with_annotations
   Box box;                 // chosen or tracked box, before extension
   HeightResult stage2;     // stage2.window: the box after extension and clipping
   bool has_filtered = false;
@@ -124,7 +130,7 @@ std::string disparity_mismatch(const DisparityMap& disparity, int width, int hei
 
 struct SequenceRun {
   std::vector<FrameRecord> frames;
-  std::size_t frames_with_box = 0, frames_tracked = 0, frames_used = 0;
+  std::size_t frames_with_box = 0, frames_tracked = 0, frames_used = 0, frames_gated_out = 0;
   SceneHeights heights;
   bool has_errors = false;  // with a ground-truth height
   HeightError scene_error;

@@ -10,6 +10,8 @@ namespace {
 
 const PipelineOptions& checked(const PipelineOptions& opt, const Calibration& cal) {
   validate(opt);
+  if (opt.gate_with_annotations)
+    throw Error("gate_with_annotations needs the LabelMe annotations of a sequence (run_sequence); the stream has none");
   if (opt.max_track_frames < 0) throw Error("max_track_frames must be >= 0 (0: no limit)");
   if (cal.width <= 0 || cal.height <= 0) throw Error("calibration width and height must be > 0");
   return opt;

@@ -1,6 +1,8 @@
 // shle_eval: the tables of docs/SHLE.md on a benchmark written by
 // `shle_synth --benchmark DIR`: per-scene HE/HER, the Table III ablation, and
-// box sources / box rules / trackers on the simulated detector's boxes.
+// box sources / box rules / trackers on the simulated detector's boxes; or, with
+// `--dataset disparity-height ROOT`, the paper's table over every scene of the
+// released Disparity Height layout (apps/shle/dataset_eval.h).
 #include <cstdlib>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +15,9 @@
 #include "apps/common/cli.h"
 #include "weights/quote_name.h"
 #include "apps/common/exec_env.h"
+#include "apps/common/output_files.h"
+#include "apps/shle/dataset_eval.h"
+#include "shle/disparity_height.h"
 #include "apps/shle/frame_loader.h"
 #include "shle/box_source.h"
 #include "shle/error.h"
@@ -114,13 +119,102 @@ shle::SequenceRun run_detections(const BenchScene& s, const shle::PipelineOption
 
 int main(int argc, char** argv) {
   apps::apply_exec_environment("shle_eval");
-  std::string root;
-  cli::Parser p("shle_eval", "--benchmark DIR",
+  std::string root, dataset, gt_file, gt_args, scenes_arg, csv_path, json_path;
+  std::vector<std::string> positional;
+  bool gate = false, compat = false, no_kalman = false, quiet = false;
+  shleapp::DatasetEvalOptions dopt;
+  cli::Parser p("shle_eval", "--benchmark DIR | --dataset disparity-height ROOT [options]",
                 "Runs shle over the synthetic benchmark written by `shle_synth --benchmark DIR` and prints\n"
-                "the HE/HER table, the Table III ablation and the box source / tracker comparison (Markdown).");
+                "the HE/HER table, the Table III ablation and the box source / tracker comparison (Markdown);\n"
+                "or over every scene of the released Disparity Height layout (ROOT/val/images_0XX/,\n"
+                "ROOT/adas_params/) and prints the paper's table: HE, HER %, CPD, RCPDA, RCPDH per scene and\n"
+                "overall.");
   p.option("benchmark", "DIR", "benchmark folder with benchmark.csv and scene_*/", &root);
-  p.required("benchmark");
+  p.option("dataset", "KIND", "disparity-height, followed by the dataset ROOT (the released data/demo_data)",
+           &dataset);
+  p.positionals("ROOT", "the dataset root after --dataset disparity-height", &positional);
+  p.option("boxes", "SRC",
+           "dataset: annotations (default), released-stage1 (--boxes-dir holds images_0XX/ folders of "
+           "[[x, y], [w, h]] files, the released tracking_mil_json) or coco-results (--boxes-dir holds "
+           "coco_instances_images0XX_results.json)",
+           &dopt.boxes);
+  p.option("boxes-dir", "DIR", "dataset: folder of the released-stage1 / coco-results box files", &dopt.boxes_dir);
+  p.option("coco-images-dir", "DIR|sorted",
+           "dataset, coco-results: folder of test2017_images_0XX.json (maps image_id to an image), or 'sorted'",
+           &dopt.coco_images_dir);
+  p.option("gt-heights", "FILE", "dataset: truth table, lines scene,height (replaces the released 17, 18, 19)",
+           &gt_file);
+  p.option("gt-height", "S=M,..", "dataset: truth heights on top of the table, e.g. 17=2.85,15=2.85", &gt_args);
+  p.option("scenes", "LIST", "dataset: only these scenes, e.g. 17,18 (default every images_0XX)", &scenes_arg);
+  p.option("box-rule", "RULE", "dataset: paper (default) or widest (the default with coco-results)", &dopt.box_rule);
+  p.option("tracker", "KIND", "dataset: ncc (default), mil or none (the default with released-stage1)",
+           &dopt.tracker);
+  p.flag("gate-with-annotations", "dataset: the released frame gate against the LabelMe boxes (uses the truth)",
+         &gate);
+  p.flag("kalman-compat", "dataset: the released Kalman off-by-one", &compat);
+  p.flag("no-kalman", "dataset: no temporal filter", &no_kalman);
+  p.option("csv", "FILE", "dataset: also write the table as CSV", &csv_path);
+  p.option("json", "FILE", "dataset: also write the table and options as JSON", &json_path);
+  p.flag("quiet", "dataset: no progress lines on stderr", &quiet);
+  p.epilog(
+      "examples:\n"
+      "  shle_eval --benchmark /tmp/shle_bm\n"
+      "  shle_eval --dataset disparity-height data/demo_data --csv table.csv\n"
+      "  shle_eval --dataset disparity-height data/demo_data --boxes released-stage1 \\\n"
+      "            --boxes-dir Stage1/faster_rcnn_output/tracking_mil_json --gate-with-annotations --kalman-compat");
   p.parse(argc, argv);
+  if (p.given("dataset") == p.given("benchmark")) p.fail("give exactly one of --benchmark DIR or --dataset KIND ROOT");
+  if (p.given("dataset")) {
+    if (dataset != "disparity-height") p.fail("--dataset must be disparity-height");
+    if (positional.size() != 1) p.fail("--dataset disparity-height takes the dataset ROOT after it");
+    if (!p.given("box-rule") && dopt.boxes == "coco-results") dopt.box_rule = "widest";
+    if (!p.given("tracker") && dopt.boxes == "released-stage1") dopt.tracker = "none";
+    dopt.pipeline.gate_with_annotations = gate;
+    dopt.pipeline.temporal.kalman_compat = compat;
+    dopt.pipeline.temporal.use_kalman = !no_kalman;
+    try {
+      dopt.gt = p.given("gt-heights") ? shle::load_gt_heights(gt_file) : shle::released_gt_heights();
+      if (p.given("gt-height")) shle::parse_gt_height_args(gt_args, &dopt.gt);
+      if (p.given("scenes")) {
+        std::stringstream ss(scenes_arg);
+        std::string item;
+        while (std::getline(ss, item, ',')) {
+          const int id = shle::parse_scene_id(item);
+          if (id < 0) p.fail("--scenes takes scene numbers, e.g. 17,18");
+          dopt.scenes.push_back(id);
+        }
+        if (dopt.scenes.empty()) p.fail("--scenes takes scene numbers, e.g. 17,18");
+      }
+      shle::parse_box_rule(dopt.box_rule);
+      shle::make_tracker(dopt.tracker, {}, {});
+      outputs::Plan plan;
+      if (p.given("gt-heights")) plan.input(gt_file, "truth table");
+      if (!csv_path.empty()) plan.output(csv_path);
+      if (!json_path.empty()) plan.output(json_path);
+      plan.check();
+      outputs::install_interrupt_cleanup();
+      shleapp::DatasetEval ev = shleapp::evaluate_dataset(positional.front(), dopt, [&](const shle::DisparityHeightScene& s) {
+        if (!quiet) std::fprintf(stderr, "shle_eval: %s\n", s.name.c_str());
+      });
+      for (const shleapp::SceneEval& s : ev.scenes)
+        if (!s.has_gt)
+          std::fprintf(stderr, "shle_eval: warning: %s has no truth height (pass --gt-height %d=M): no HE/HER\n",
+                       s.scene.name.c_str(), s.scene.id);
+      outputs::FileSet set;
+      if (!csv_path.empty()) set.add(csv_path, shleapp::dataset_table_csv(ev));
+      if (!json_path.empty()) set.add(json_path, shleapp::dataset_table_json(ev));
+      set.commit();
+      std::printf("%s", shleapp::dataset_table_markdown(ev).c_str());
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "shle_eval: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (!positional.empty()) p.fail("unexpected argument '" + positional.front() + "'");
+  for (const char* o : {"boxes", "boxes-dir", "coco-images-dir", "gt-heights", "gt-height", "scenes", "box-rule", "tracker",
+                        "gate-with-annotations", "kalman-compat", "no-kalman", "csv", "json", "quiet"})
+    if (p.given(o)) p.fail(std::string("--") + o + " applies to --dataset, not to --benchmark");
   try {
     std::vector<BenchScene> scenes = read_listing(root);
 

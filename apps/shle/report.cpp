@@ -44,8 +44,9 @@ std::string frames_csv(const shle::SequenceRun& run) {
     } else {
       s += ",,,,,";
     }
-    s += (r.stage2.has_height ? num(r.stage2.height) : "") + ",";
-    s += (r.has_filtered ? num(r.filtered) : "") + "\n";
+    // %.17g: the doubles round-trip exactly (reference comparisons read them back).
+    s += (r.stage2.has_height ? num(r.stage2.height, "%.17g") : "") + ",";
+    s += (r.has_filtered ? num(r.filtered, "%.17g") : "") + "\n";
   }
   return s;
 }
@@ -68,12 +69,15 @@ std::string summary_json(const shle::SequenceRun& run, const RunDescription& d) 
                        ", \"labels\": [" + labels + "], \"score_threshold\": " + jnum(d.detector.score_threshold) +
                        "}");
   }
+  if (!d.box_path.empty()) kv("box_path", json::quote(d.box_path));
+  if (!d.coco_images.empty()) kv("coco_images", json::quote(d.coco_images));
   kv("box_rule", json::quote(d.box_rule));
   kv("tracker", json::quote(d.tracker));
   kv("frames", std::to_string(run.frames.size()));
   kv("frames_with_box", std::to_string(run.frames_with_box));
   kv("frames_tracked", std::to_string(run.frames_tracked));
   kv("frames_used", std::to_string(run.frames_used));
+  kv("frames_gated_out", std::to_string(run.frames_gated_out));
   kv("scene_height", run.heights.has_scene_height ? jnum(run.heights.scene_height) : "null");
   kv("gt_height", o.has_gt_height ? jnum(o.gt_height) : "null");
   if (run.has_errors) {
@@ -106,7 +110,8 @@ std::string summary_json(const shle::SequenceRun& run, const RunDescription& d) 
          (o.temporal.use_kalman ? "true" : "false") + ", \"kalman_compat\": " +
          (o.temporal.kalman_compat ? "true" : "false") + ", \"q\": " + jnum(o.temporal.kalman.q) +
          ", \"r\": " + jnum(o.temporal.kalman.r) + ", \"p0\": " + jnum(o.temporal.kalman.p0) +
-         ", \"min_score\": " + jnum(o.box_rule.min_score) + ", \"search_radius\": " +
+         ", \"min_score\": " + jnum(o.box_rule.min_score) + ", \"gate_with_annotations\": " +
+         (o.gate_with_annotations ? "true" : "false") + ", \"search_radius\": " +
          std::to_string(o.ncc.search_radius) + "}");
   double s2_sum = 0, s2_max = 0, load_sum = 0, track_sum = 0;
   std::size_t s2_n = 0, load_n = 0, track_n = 0;

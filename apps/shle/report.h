@@ -26,6 +26,8 @@ struct RunDescription {
   // Written as "detector" in the summary when box_source is "detector", so a
   // result says which weights made its boxes.
   DetectorDescription detector;
+  // The folder / file of --boxes released-stage1 / coco-results (and --coco-images).
+  std::string box_path, coco_images;
 };
 
 std::string summary_json(const shle::SequenceRun& run, const RunDescription& description);

@@ -20,6 +20,7 @@
 #include "shle/detector_box_source.h"
 #include "shle/error.h"
 #include "shle/pipeline.h"
+#include "shle/released_box_source.h"
 
 namespace {
 
@@ -56,15 +57,17 @@ int main(int argc, char** argv) {
   apps::apply_exec_environment("shle");
   std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
   std::string tracker = "ncc", out_dir = "shle_out", max_pixels;
-  std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels;
+  std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels, coco_images;
+  std::vector<std::string> box_paths;
   double det_score = 0.3;
   int threads = 0;
   double gt_height = 0, bf = 0;
   bool filter_single = false, no_kde = false, no_depth = false, no_kalman = false, compat = false, quiet = false;
+  bool gate = false;
   shle::PipelineOptions opt;
   shle::HeightOptions& h = opt.height;
 
-  cli::Parser p("shle", "--sequence DIR --calib C.json [options]",
+  cli::Parser p("shle", "--sequence DIR --calib C.json [--boxes KIND [PATH]] [options]",
                 "Stereo height-limit estimation (SHLE): the clearance of a bar, bridge or cable ahead,\n"
                 "from the left images, disparity maps and boxes of one sequence. Writes OUT/frames.csv,\n"
                 "OUT/summary.json and OUT/heights.png.");
@@ -75,9 +78,22 @@ int main(int argc, char** argv) {
            &calib_format);
   p.option("bf", "M_PX", "override baseline x focal length (metre-pixels)", &bf);
   p.option("boxes", "SRC",
-           "annotations (LabelMe beside the images, default), a CSV frame,x0,y0,x1,y1,score, or detector "
-           "(Faster R-CNN on every left image, with --detector-weights)",
+           "annotations (LabelMe beside the images, default), a CSV frame,x0,y0,x1,y1,score, detector "
+           "(Faster R-CNN on every left image, with --detector-weights), released-stage1 DIR (the released "
+           "stage 1's per-frame [[x, y], [w, h]] JSON folder) or coco-results FILE (detectron2's "
+           "coco_instances_results.json)",
            &boxes);
+  p.positionals("PATH", "the folder after --boxes released-stage1, the file after --boxes coco-results", &box_paths);
+  p.option("coco-images", "FILE|sorted",
+           "required with --boxes coco-results: the COCO dataset file the detector ran on "
+           "(test2017_images_0XX.json), which maps image_id to an image; or 'sorted': image_id k is the k-th "
+           "image in file-name order",
+           &coco_images);
+  p.flag("gate-with-annotations",
+         "the released frame gate: use a frame only if its box hits its LabelMe annotation box "
+         "(IoU > 0, or right edge within 200 px of the annotation's left edge and top within 20 px). "
+         "Uses the ground truth: for reproducing the released figures only",
+         &gate);
   p.option("detector-weights", "W", "torchvision Faster R-CNN state_dict as .safetensors (--boxes detector)",
            &det_weights);
   p.option("detector-model", "NAME",
@@ -88,13 +104,18 @@ int main(int argc, char** argv) {
   p.option("detector-labels", "L,..", "labels that are height-limit devices (default: every label but 0)",
            &det_labels);
   p.option("threads", "N", "threads for the detector (default: all cores)", &threads);
-  p.option("box-rule", "RULE", "paper (default: drop left, low, top-edge boxes, best score) or widest (released)",
+  p.option("box-rule", "RULE",
+           "paper (default: drop left, low, top-edge boxes, best score) or widest (released; the default with "
+           "coco-results)",
            &rule);
   p.option("min-score", "S", "keep candidates with score > S (default 0.3)", &opt.box_rule.min_score);
   p.option("box-test", "T", "paper rule position test: whole (box entirely in the region, default) or centre",
            &box_test);
   p.flag("filter-single-box", "apply the paper rule's position filters to a lone candidate too", &filter_single);
-  p.option("tracker", "KIND", "fills frames between boxes: ncc (default), mil (OpenCV MIL port) or none", &tracker);
+  p.option("tracker", "KIND",
+           "fills frames between boxes: ncc (default), mil (OpenCV MIL port) or none (default with "
+           "released-stage1, whose files hold the tracked boxes already)",
+           &tracker);
   p.option("search-radius", "PX", "tracker search radius (default 25)", &opt.ncc.search_radius);
   p.option("gt-height", "M", "true height: adds HE / HER to the summary and the plot", &gt_height);
   p.option("out-dir", "OUT", "output folder (default shle_out)", &out_dir);
@@ -124,12 +145,32 @@ int main(int argc, char** argv) {
       "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --gt-height 3.3 --out-dir /tmp/out\n"
       "  synth --model fasterrcnn_mobilenet_v3_large_320_fpn --out det.safetensors   # untrained\n"
       "  shle --sequence /tmp/scene --calib /tmp/scene/calib.json --boxes detector \\\n"
-      "       --detector-weights det.safetensors --detector-model fasterrcnn_mobilenet_v3_large_320_fpn");
+      "       --detector-weights det.safetensors --detector-model fasterrcnn_mobilenet_v3_large_320_fpn\n"
+      "  # the released code's files (scene 17 of Disparity Height):\n"
+      "  shle --sequence data/demo_data/val/images_017 --calib data/demo_data/adas_params --calib-format smartereye \\\n"
+      "       --boxes released-stage1 Stage1/faster_rcnn_output/tracking_mil_json/images_017 \\\n"
+      "       --gate-with-annotations --kalman-compat --gt-height 2.85");
   p.parse(argc, argv);
   imageio::DecodeLimits limits;
   if (p.given("max-pixels") && !imageio::parse_max_pixels(max_pixels, &limits.max_pixels))
     p.fail("--max-pixels takes megapixels > 0, e.g. 64 or 0.5");
 
+  const bool released_stage1 = boxes == "released-stage1", coco_results = boxes == "coco-results";
+  if (released_stage1 || coco_results) {
+    if (box_paths.size() != 1)
+      p.fail(std::string("--boxes ") + boxes + " takes one " + (released_stage1 ? "folder" : "file") +
+             " after it, e.g. --boxes " + boxes + (released_stage1 ? " tracking_mil_json/images_017" : " coco_instances_results.json"));
+    if (released_stage1 && !p.given("tracker")) tracker = "none";
+    if (coco_results && !p.given("box-rule")) rule = "widest";
+  } else if (!box_paths.empty()) {
+    p.fail("unexpected argument '" + box_paths.front() + "' (only --boxes released-stage1 DIR and --boxes "
+           "coco-results FILE take a path after them)");
+  }
+  if (p.given("coco-images") && !coco_results) p.fail("--coco-images needs --boxes coco-results FILE");
+  if (coco_results && coco_images.empty())
+    p.fail("--boxes coco-results needs --coco-images FILE (the COCO dataset file the detector ran on, e.g. "
+           "test2017_images_017.json) or --coco-images sorted (image_id k = k-th image in file-name order)");
+  opt.gate_with_annotations = gate;
   opt.temporal.use_kalman = !no_kalman;
   opt.temporal.kalman_compat = compat;
   h.use_kde = !no_kde;
@@ -196,7 +237,12 @@ int main(int argc, char** argv) {
       } else {
         plan.input(calib, "calibration");
       }
-      if (!detector && boxes != "annotations") plan.input(boxes, "boxes file");
+      if (!detector && boxes != "annotations" && !released_stage1 && !coco_results) plan.input(boxes, "boxes file");
+      if (coco_results) plan.input(box_paths.front(), "COCO results");
+      if (p.given("coco-images") && coco_images != "sorted") plan.input(coco_images, "COCO dataset file");
+      if (released_stage1 && std::filesystem::is_directory(box_paths.front(), ec))
+        for (const auto& e : std::filesystem::directory_iterator(box_paths.front(), ec))
+          plan.input(e.path().string(), "released stage-1 box file");
       if (detector) plan.input(det_weights, "detector weights");
       for (const shle::FrameFiles& f : seq.frames) {
         plan.input(f.image);
@@ -223,7 +269,14 @@ int main(int argc, char** argv) {
     }
     std::unique_ptr<shle::BoxSource> source;
     shleapp::DetectorDescription det_desc;
-    if (boxes == "annotations") {
+    shleapp::PngFrameLoader loader(limits);
+    if (released_stage1 || coco_results) {
+      std::vector<shle::ImageSize> sizes = shle::sequence_image_sizes(seq, loader, cal);
+      if (released_stage1)
+        source = std::make_unique<shle::ReleasedStage1Source>(box_paths.front(), seq, sizes);
+      else
+        source = std::make_unique<shle::CocoResultsSource>(box_paths.front(), coco_images, seq, sizes);
+    } else if (boxes == "annotations") {
       source = std::make_unique<shle::AnnotationBoxSource>();
     } else if (detector) {
       auto d = std::make_unique<shle::DetectorBoxSource>(det_weights, det_variant, det_opt);
@@ -239,7 +292,6 @@ int main(int argc, char** argv) {
     }
 
     std::filesystem::create_directories(out_dir);
-    shleapp::PngFrameLoader loader(limits);
     bool bar = !quiet && isatty(2);
     shle::SequenceRun run = shle::run_sequence(seq, cal, *source, loader, opt,
                                                bar ? shle::Progress(progress_bar) : shle::Progress());
@@ -261,7 +313,9 @@ int main(int argc, char** argv) {
 
     std::string csv = shleapp::frames_csv(run);
     shleapp::RunDescription desc{sequence, shle::layout_name(seq.layout), calib, source->name(), rule, tracker, opt,
-                                 det_desc};
+                                 det_desc, "", ""};
+    if (released_stage1 || coco_results) desc.box_path = box_paths.front();
+    if (coco_results) desc.coco_images = coco_images;
     std::string summary = shleapp::summary_json(run, desc);
     shleapp::HeightPlotData plot;
     plot.frames = static_cast<int>(run.frames.size());

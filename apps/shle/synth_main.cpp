@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
   std::string out, device = "bar", layout = "released";
   double height = 3.3, start = 70, end = 5, miss = 0.2;
   int seed = 1, frames = 60;
-  bool benchmark = false, no_clutter = false, quiet = false;
+  bool benchmark = false, no_clutter = false, quiet = false, disparity_height = false;
   cli::Parser p("shle_synth", "--out DIR [options]",
                 "Synthetic stereo benchmark for shle: a seeded, deterministic drive towards a height-limit\n"
                 "device (bar, bridge or cables) rendered as left images, disparity (.dat, 1/32 px) and\n"
@@ -46,6 +46,10 @@ int main(int argc, char** argv) {
   p.flag("no-clutter", "no trees, pole or buildings", &no_clutter);
   p.flag("benchmark", "write the fixed benchmark set (docs/SHLE.md) into DIR/scene_*/ and DIR/benchmark.csv",
          &benchmark);
+  p.flag("disparity-height", "write a small dataset in the released Disparity Height layout: DIR/val/images_017 "
+         "(bar 2.85 m), images_018 (bar 2.2 m), images_019 (bridge 5.3 m) and DIR/adas_params/ (SmarterEye "
+         "calibData.json, DepthCalib.json)",
+         &disparity_height);
   p.flag("quiet", "no progress output", &quiet);
   p.required("out");
   p.parse(argc, argv);
@@ -65,7 +69,28 @@ int main(int argc, char** argv) {
   try {
     std::vector<shle::synth::SceneSpec> specs;
     std::vector<std::string> dirs;
-    if (benchmark) {
+    if (benchmark && disparity_height) p.fail("--benchmark and --disparity-height are exclusive");
+    if (disparity_height) {
+      // The released demo scenes' ids and truths (shle.md section 2.3).
+      const struct { int id; shle::synth::Device device; double height; } demo[] = {
+          {17, shle::synth::Device::Bar, 2.85}, {18, shle::synth::Device::Bar, 2.2},
+          {19, shle::synth::Device::Bridge, 5.3}};
+      for (const auto& d : demo) {
+        shle::synth::SceneSpec s;
+        s.seed = static_cast<std::uint64_t>(seed) * 1000 + static_cast<std::uint64_t>(d.id);
+        s.device = d.device;
+        s.clearance = d.height;
+        if (p.given("frames")) s.frames = frames;
+        s.clutter = !no_clutter;
+        specs.push_back(s);
+        char name[32];
+        std::snprintf(name, sizeof name, "images_%03d", d.id);
+        dirs.push_back((std::filesystem::path(out) / "val" / name).string());
+      }
+      lay = shleapp::SynthLayout::Released;
+      shleapp::write_smartereye_params(shle::synth::Scene(specs.front()).calibration(),
+                                       (std::filesystem::path(out) / "adas_params").string());
+    } else if (benchmark) {
       specs = shle::synth::benchmark_scenes();
       for (std::size_t i = 0; i < specs.size(); ++i) {
         if (p.given("frames")) specs[i].frames = frames;

@@ -107,4 +107,24 @@ void write_synth_scene(const shle::synth::Scene& scene, const std::string& dir, 
   last.commit();
 }
 
+void write_smartereye_params(const shle::Calibration& cal, const std::string& dir) {
+  auto array = [](std::vector<double> v) {
+    std::string s = "{\"data\": [";
+    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + num(v[i], "%.17g");
+    return s + "]}\n";
+  };
+  std::vector<double> calib(64, 0.0), depth(8, 0.0);
+  calib[4] = cal.intrinsics.fx;
+  calib[12] = cal.intrinsics.fy;
+  calib[39] = calib[41] = cal.intrinsics.cx + 10;
+  calib[40] = calib[42] = cal.intrinsics.cy;
+  depth[0] = 4;
+  depth[4] = 6.5;
+  fs::create_directories(dir);
+  outputs::FileSet set;
+  set.add((fs::path(dir) / "calibData.json").string(), array(calib));
+  set.add((fs::path(dir) / "DepthCalib.json").string(), array(depth));
+  set.commit();
+}
+
 }  // namespace shleapp
