@@ -1,6 +1,7 @@
 #include "weights/tensor_compare.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <set>
@@ -103,6 +104,23 @@ ValueComparison compare_values(const float* a, const float* ref, const std::vect
 ValueComparison compare_values(const double* a, const double* ref, const std::vector<std::int64_t>& shape,
                                const Tolerance& tol) {
   return compare_impl(a, ref, shape, tol);
+}
+
+std::string summary(const ValueComparison& v) {
+  auto fmt = [](double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", x);
+    return std::string(buf);
+  };
+  std::string s = "max|diff| " + fmt(v.max_abs_diff) + " (" + fmt(v.max_rel_diff) + " of max|ref| " +
+                  fmt(v.max_abs_ref) + ") mean " + fmt(v.mean_abs_diff);
+  if (v.worst >= 0)
+    s += " at " + index_str(v.worst_coords) + " (" + fmt(v.worst_value) + " vs " + fmt(v.worst_ref) + ")";
+  if (v.nan || v.inf || v.ref_nan || v.ref_inf)
+    s += "; NaN/Inf A " + std::to_string(v.nan) + "/" + std::to_string(v.inf) + ", ref " + std::to_string(v.ref_nan) +
+         "/" + std::to_string(v.ref_inf);
+  if (!v.ok()) s += "; " + std::to_string(v.failing) + " of " + std::to_string(v.count) + " elements out of tolerance";
+  return s;
 }
 
 std::vector<std::int64_t> unravel_index(std::int64_t flat, const std::vector<std::int64_t>& shape) {

@@ -58,17 +58,7 @@ std::string describe(const weights::TensorReport& r) {
     case TensorStatus::Ok:
     case TensorStatus::OutOfTolerance: break;
   }
-  const weights::ValueComparison& v = r.values;
-  std::string s = "max|diff| " + fmt(v.max_abs_diff) + " (" + fmt(v.max_rel_diff) + " of max|ref| " +
-                  fmt(v.max_abs_ref) + ") mean " + fmt(v.mean_abs_diff);
-  if (v.worst >= 0)
-    s += " at " + weights::index_str(v.worst_coords) + " (" + fmt(v.worst_value) + " vs " + fmt(v.worst_ref) + ")";
-  if (v.nan || v.inf || v.ref_nan || v.ref_inf)
-    s += "; NaN/Inf A " + std::to_string(v.nan) + "/" + std::to_string(v.inf) + ", ref " + std::to_string(v.ref_nan) +
-         "/" + std::to_string(v.ref_inf);
-  if (r.status == TensorStatus::OutOfTolerance)
-    s += "; " + std::to_string(v.failing) + " of " + std::to_string(v.count) + " elements out of tolerance";
-  return s;
+  return weights::summary(r.values);
 }
 
 void print_text(const weights::FileComparison& c, const std::string& a, const std::string& ref,
