@@ -4,7 +4,7 @@ written by scripts/torch_dump.py, for the nncompare test that must name the firs
 module downstream of the perturbed tensor. Writes into --out:
   perturbed_weights.safetensors          seeded convnext_tiny state_dict (features.*)
   perturbed_weights_changed.safetensors  the same with PERTURBED scaled by 1.01
-  perturbed_input.safetensors            'input' [1,3,64,96]
+  perturbed_input.safetensors            'input' [1,3,64,96] (and raw as perturbed_input.f32)
   perturbed_original.dump.safetensors    torch_dump.py on the original weights
   perturbed_changed.dump.safetensors     torch_dump.py on the perturbed weights"""
 import os
@@ -30,6 +30,7 @@ def main():
     refcommon.save(f"{out}/perturbed_weights_changed.safetensors", changed, {"perturbed": PERTURBED})
     x = torch.randn((1, 3, 64, 96), generator=torch.Generator().manual_seed(5))
     refcommon.save(f"{out}/perturbed_input.safetensors", {"input": x})
+    x.numpy().astype("<f4").tofile(f"{out}/perturbed_input.f32")  # for examples/check_convnext
     for weights, dump in (("perturbed_weights", "perturbed_original"), ("perturbed_weights_changed", "perturbed_changed")):
         cmd = [sys.executable, TORCH_DUMP, "--model", "convnext_tiny", "--weights", f"{out}/{weights}.safetensors",
                "--input", f"{out}/perturbed_input.safetensors", "--output", f"{out}/{dump}.dump.safetensors",
