@@ -62,13 +62,14 @@ std::string describe(const weights::TensorReport& r) {
 }
 
 void print_text(const weights::FileComparison& c, const std::string& a, const std::string& ref,
-                const weights::Tolerance& tol) {
+                const weights::Tolerance& tol, bool brief) {
   std::printf("A: %s\nreference: %s\norder: %s\ntolerance: |a - ref| <= %s + %s * %s\n\n", a.c_str(), ref.c_str(),
               c.order_source.c_str(), fmt(tol.atol).c_str(), fmt(tol.rtol).c_str(),
               tol.per_element ? "|ref| (per element)" : "max|ref| of the tensor");
   std::size_t width = 4;
   for (const auto& r : c.tensors) width = std::max(width, r.name.size());
   for (const auto& r : c.tensors) {
+    if (brief && !r.failed()) continue;
     const char* mark = r.failed() ? "FAIL" : r.status == weights::TensorStatus::Ok ? "ok  " : "--  ";
     std::printf("%s  %-*s  %-18s  %s\n", mark, static_cast<int>(width), r.name.c_str(), shape_of(r).c_str(),
                 describe(r).c_str());
@@ -122,7 +123,7 @@ int main(int argc, char** argv) {
   apps::apply_exec_environment("nncompare");
   std::vector<std::string> files;
   double rtol = weights::Tolerance{}.rtol, atol = weights::Tolerance{}.atol;
-  bool per_element = false, as_json = false;
+  bool per_element = false, as_json = false, brief = false;
   std::string filter;
   cli::Parser args("nncompare", "A.safetensors REF.safetensors [options]",
                    "Compares every tensor of A with the same-named tensor of the reference REF (e.g. an\n"
@@ -137,6 +138,8 @@ int main(int argc, char** argv) {
   args.flag("per-element", "scale rtol by |ref_i| of each element instead of max|ref| (numpy.allclose's rule)",
             &per_element);
   args.option("filter", "REGEX", "compare only tensors whose name contains a match of REGEX (ECMAScript)", &filter);
+  args.flag("brief", "list only the failing tensors (the summary lines stay; with an nnrun dump\n"
+            "                            against a torch dump, the modules our engine fuses are in one file only)", &brief);
   args.flag("json", "print the report as one JSON object instead of the table", &as_json);
   args.epilog("exit status: 0 every common tensor within tolerance, 1 a tensor out of tolerance or with a\n"
               "different shape or dtype (the report names the first in network order), 2 usage error or a\n"
@@ -166,7 +169,7 @@ int main(int argc, char** argv) {
     if (!filter.empty()) keep = [&re](const std::string& name) { return std::regex_search(name, re); };
     const weights::FileComparison c = weights::compare_files(a, ref, tol, keep);
     if (as_json) print_json(c, files[0], files[1], tol);
-    else print_text(c, files[0], files[1], tol);
+    else print_text(c, files[0], files[1], tol, brief);
     return c.failures ? kExitFailure : 0;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "nncompare: out of memory\n");

@@ -86,6 +86,10 @@ TEST_F(NncompareCli, FirstFailureFollowsTheReferencesDumpOrderNotTheDataOrder) {
   EXPECT_NE(r.out.find("at [1] (21 vs 20)"), std::string::npos) << r.out;
   EXPECT_LT(r.out.find("  early "), r.out.find("  middle "));
   EXPECT_LT(r.out.find("  middle "), r.out.find("  late "));
+  r = run("a.st", "b.st", "--brief");  // the passing tensors are left out
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.out.find("  early "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("FAIL  middle "), std::string::npos) << r.out;
 
   // Without dump.order anywhere: the reference's data order, where "late" comes first.
   write("b2.st", base());
