@@ -58,7 +58,8 @@ def parse_args(argv):
                     "(state_dict, {'model_state_dict': ...}, {'state_dict': ...}, {'model': ...})")
     ap.add_argument("--input", required=True, metavar="X.safetensors", help="tensor 'input', as nnrun takes it")
     ap.add_argument("--output", required=True, metavar="DUMP.safetensors", help="the dump (written atomically)")
-    ap.add_argument("--filter", metavar="REGEX", help="dump only tensors whose name contains a match (re.search)")
+    ap.add_argument("--filter", metavar="REGEX",
+                    help="dump only module outputs whose name contains a match (re.search)")
     ap.add_argument("--outputs", action="store_true",
                     help="also write the model's final outputs under nnrun --output's names "
                     "(features; prediction; boxes, scores, labels)")
@@ -206,15 +207,16 @@ def load_state(torch, model, state, required, path):
     if missing:
         more = f" and {len(missing) - 5} more" if len(missing) > 5 else ""
         raise DumpError(f"{path}: missing tensor(s) {', '.join(missing[:5])}{more} for this model")
-    for k, v in state.items():
-        if k in own and tuple(own[k].shape) != tuple(v.shape):
+    used = {k: v for k, v in state.items() if k in own and k.startswith(required)}
+    for k, v in used.items():
+        if tuple(own[k].shape) != tuple(v.shape):
             raise DumpError(f"{path}: tensor '{k}' has shape {list(v.shape)}, the model expects {list(own[k].shape)}")
-    unused = [k for k in state if k not in own]
+    unused = [k for k in state if k not in used]
     if unused:
         more = f" and {len(unused) - 5} more" if len(unused) > 5 else ""
         print(f"{PROG}: warning: {path}: {len(unused)} tensor(s) not used by this model: "
               f"{', '.join(unused[:5])}{more}", file=sys.stderr)
-    model.load_state_dict({k: v for k, v in state.items() if k in own}, strict=False)
+    model.load_state_dict(used, strict=False)
     return model.eval()
 
 
@@ -286,6 +288,10 @@ def run(args):
     out_dir = os.path.dirname(os.path.abspath(args.output))
     if not os.path.isdir(out_dir):
         raise DumpError(f"{args.output}: folder {out_dir} does not exist")
+    if os.path.exists(args.output):
+        for role, path in (("weights", args.weights), ("input", args.input)):
+            if os.path.samefile(args.output, path):
+                raise DumpError(f"{args.output}: is the {role} file; refusing to overwrite it")
     torch = import_torch()
     if args.threads > 0:
         torch.set_num_threads(args.threads)
@@ -298,7 +304,8 @@ def run(args):
         y = forward(x)
     recorder.remove()
     tensors = dict(recorder.tensors)
-    if args.outputs:
+    if args.outputs:  # asked for explicitly: not subject to --filter
+        recorder.keep = lambda name: True
         for k, v in final_outputs(torch, args.model, y).items():
             recorder.tensors = {}
             recorder.add(k, v)

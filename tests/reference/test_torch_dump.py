@@ -143,6 +143,8 @@ def test_errors(ref, tmp):
         (("--model", "convnext", "--weights", w, "--input", x, "--filter", "("), "--filter"),
         (("--model", "convnext", "--weights", w, "--input", x, "--filter", "^nothing$"), "nothing to write"),
     ]
+    r = run("--model", "convnext", "--weights", w, "--input", x, "--output", x)
+    check(r.returncode == 1 and "is the input file" in r.stderr, f"output = input: {r.stderr!r}")
     for args, expect in cases:
         r = run(*args, "--output", out)
         check(r.returncode == 1, f"{args}: exit {r.returncode}, expected 1: {r.stderr.strip()}")
