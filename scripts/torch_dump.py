@@ -21,11 +21,13 @@ import sys
 PROG = "torch_dump.py"
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "weights"))
-import safetensors_io  # noqa: E402
-import torch_models  # noqa: E402
-
 TORCH_HINT = ("needs Debian's python3-torch and python3-torchvision for /usr/bin/python3: "
               "apt-get install -y python3-torch python3-torchvision python3-numpy")
+try:
+    import safetensors_io  # noqa: E402  (numpy)
+except ImportError as e:
+    sys.exit(f"{PROG}: {TORCH_HINT} ({e})")
+import torch_models  # noqa: E402
 MODELS = torch_models.CONVNEXT_BUILDERS + ("convnext", "stixelnext") + torch_models.DETECTOR_BUILDERS
 # nnrun --output's tensor names, written with --outputs.
 STIXEL_OUTPUT = "prediction"

@@ -19,9 +19,8 @@ import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TORCH_DUMP = os.path.normpath(os.path.join(HERE, "..", "..", "scripts", "torch_dump.py"))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "weights"))
-import safetensors_io  # noqa: E402
-import refcommon  # noqa: E402
+import refcommon  # noqa: E402  (exits with the install hint without numpy)
+import safetensors_io  # noqa: E402  (weights/, on the path through refcommon)
 
 failures = []
 
