@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <set>
 #include <sstream>
 #include <unordered_set>
 
