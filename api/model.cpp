@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "api/handles.h"
+#include "api/safetensors_file.h"
 #include "api/status.h"
 #include "nn/gemm_bf16.h"
 #include "nn/winograd.h"
@@ -230,20 +231,7 @@ roadnn_model_params roadnn_model_default_params(roadnn_model_kind kind) {
 roadnn_status roadnn_model_load_file(const char* path, const roadnn_model_params* params, roadnn_model** out) {
   return load_guarded("roadnn_model_load_file", out, params, [&] {
     require(path, "roadnn_model_load_file", "path");
-    // Opening first (without blocking, regular files only) tells an I/O problem
-    // (missing, unreadable, a FIFO or device) from a malformed model, which
-    // weights::SafeTensors::load would report every failure as.
-    std::uint64_t size = 0;
-    std::string problem;
-    std::FILE* f = weights::open_regular_file(path, &size, &problem);
-    if (!f) {
-      // "cannot open (Permission denied)": the file exists but is unreadable.
-      if (problem.rfind("cannot open (", 0) == 0 && problem.find("No such file") == std::string::npos)
-        problem.insert(std::string("cannot open").size(), " for reading");
-      fail(ROADNN_ERROR_IO, std::string(path) + ": " + problem);
-    }
-    std::fclose(f);
-    return weights::SafeTensors::load(path);
+    return load_safetensors_file(path);
   });
 }
 

@@ -77,7 +77,9 @@ def _tensor_bytes(name, value):
     if dtype is None:
         raise SafetensorsError(f"tensor '{name}': unsupported dtype {arr.dtype}")
     little = np.ascontiguousarray(arr, dtype=arr.dtype.newbyteorder("<"))
-    return dtype, list(arr.shape), little.tobytes()
+    # A byte view, not a copy: saving a multi-GB dump (scripts/torch_dump.py) must not
+    # need twice its size in memory.
+    return dtype, list(arr.shape), memoryview(little.reshape(-1)).cast("B")
 
 
 def _check_name(name):

@@ -13,6 +13,7 @@ import time
 import zlib
 
 import refcommon
+import torch_models  # weights/, on the path through refcommon
 
 CASES = {
     # name: (weights, (N, C, H, W), input kind)
@@ -25,16 +26,11 @@ CASES = {
 
 
 def build(torch, kind):
-    from functools import partial
-    from torchvision.models import convnext
     if kind == "tiny":
-        model = convnext.convnext_tiny()
+        model = torch_models.convnext(torch, "convnext_tiny")
     else:
         # Widths that are not multiples of 16, to exercise every kernel tail.
-        cfg = [convnext.CNBlockConfig(20, 36, 1), convnext.CNBlockConfig(36, 52, 1),
-               convnext.CNBlockConfig(52, 100, 2), convnext.CNBlockConfig(100, None, 1)]
-        model = convnext.ConvNeXt(cfg, stochastic_depth_prob=0.0,
-                                  norm_layer=partial(convnext.LayerNorm2d, eps=1e-6))
+        model = torch_models.convnext_from_widths(torch, [20, 36, 52, 100], [1, 1, 2, 1])
     refcommon.init_weights(model, seed=1234 if kind == "tiny" else 99)
     return model.eval()
 

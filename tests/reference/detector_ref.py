@@ -12,6 +12,7 @@ import sys
 import zlib
 
 import refcommon
+import torch_models  # weights/, on the path through refcommon
 
 MODELS = {
     "mnv3": "fasterrcnn_mobilenet_v3_large_fpn",
@@ -23,8 +24,7 @@ CASES = {"720p": (720, 1280), "odd": (457, 613)}
 
 def build(torch, builder, seed, num_classes=3):
     """torchvision's detector `builder` with seeded random weights (the tests use 3 classes)."""
-    from torchvision.models import detection
-    model = getattr(detection, builder)(weights=None, weights_backbone=None, num_classes=num_classes)
+    model = torch_models.detector(torch, builder, num_classes)
     refcommon.init_weights(model, seed)
     g = torch.Generator().manual_seed(seed + 1)
     with torch.no_grad():

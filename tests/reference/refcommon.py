@@ -4,10 +4,13 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "weights"))
-import safetensors_io  # noqa: E402
 
 INSTALL_HINT = ("PyTorch reference outputs need Debian's python3-torch and python3-torchvision for "
                 "/usr/bin/python3: apt-get install -y python3-torch python3-torchvision python3-numpy")
+try:
+    import safetensors_io  # noqa: E402  (numpy)
+except ImportError as e:
+    sys.exit("error: %s (%s)" % (INSTALL_HINT, e))
 
 
 def import_torch():
