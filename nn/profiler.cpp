@@ -1,5 +1,6 @@
 #include "nn/profiler.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace nn {
@@ -9,8 +10,14 @@ std::string nchw_str(const Shape& s) {
          std::to_string(s.w) + "]";
 }
 
-int Profiler::add(std::string layer, std::string op, std::string shape, double flops) {
-  entries_.push_back({std::move(layer), std::move(op), std::move(shape), flops, 0.0, 0});
+int Profiler::add(std::string layer, std::string op, std::string shape, double flops, double bytes) {
+  ProfileEntry e;
+  e.layer = std::move(layer);
+  e.op = std::move(op);
+  e.shape = std::move(shape);
+  e.flops = flops;
+  e.bytes = bytes;
+  entries_.push_back(std::move(e));
   return static_cast<int>(entries_.size()) - 1;
 }
 
@@ -18,6 +25,14 @@ void Profiler::reset_times() {
   for (auto& e : entries_) {
     e.total_ms = 0;
     e.calls = 0;
+    e.samples.clear();
+  }
+}
+
+void Profiler::reserve_samples(int calls) {
+  for (auto& e : entries_) {
+    e.samples.clear();
+    e.samples.reserve(static_cast<std::size_t>(std::max(calls, 0)));
   }
 }
 

@@ -1,6 +1,7 @@
 // The plain ConvNeXt runs of nnrun (no --profile) go through the public API
 // (roadnn.hpp), as an embedder's program would: the API loads and validates the
-// weights, the session plans the arena and owns the threads. --profile needs the
+// weights, the session plans the arena and owns the threads; --dump uses the session's
+// dump callback. --profile needs the
 // engine's per-layer profiler, which the API does not expose, and keeps the
 // internal runner (convnext_runner.cpp).
 #include <cstdio>
@@ -74,11 +75,27 @@ class ConvNeXtApiRunner : public Runner {
     roadnn::check(roadnn_convnext_run(session_->get(), input_.data(), input_.size(), out_.data(), out_.size()));
   }
 
+  // Through the API's dump callback, as an embedder would.
+  void set_dump(nn::DumpSink* dump) override {
+    dump_ = dump;
+    if (dump)
+      session_->set_dump(&ConvNeXtApiRunner::on_tensor, this);
+    else
+      session_->set_dump(nullptr, nullptr);
+  }
+
   void write_outputs(weights::Writer& out) const override {
     out.add_f32("features", {shape_[0], shape_[1], shape_[2], shape_[3]}, out_.data());
   }
 
  private:
+  static void on_tensor(const char* name, const std::int64_t* shape, int rank, const float* data, const char* covers,
+                        void* self) {
+    nn::DumpSink* dump = static_cast<ConvNeXtApiRunner*>(self)->dump_;
+    if (dump->wants(name)) dump->tensor(name, std::vector<std::int64_t>(shape, shape + rank), data, covers);
+  }
+
+  nn::DumpSink* dump_ = nullptr;
   std::string path_;
   RunOptions options_;
   roadnn::Model model_;

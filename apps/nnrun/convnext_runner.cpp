@@ -52,6 +52,7 @@ class ConvNeXtRunner : public Runner {
   }
 
   nn::Profiler* profiler() override { return &model_.profiler(); }
+  void set_dump(nn::DumpSink* dump) override { model_.set_dump(dump); }
 
  private:
   nn::ConvNeXt model_;

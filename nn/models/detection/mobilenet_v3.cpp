@@ -75,7 +75,8 @@ std::vector<weights::TensorSpec> MobileNetV3Backbone::tensor_specs(const std::st
   return s;
 }
 
-MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps) {
+MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps)
+    : prefix_(prefix) {
   stem_ = load_conv_bn(st, prefix + "0.0.weight", prefix + "0.1.", conv_params(3, kStem, 3, 2), eps);
   for (int i = 1; i <= 15; ++i) {
     const BlockSpec& s = kLarge[i - 1];
@@ -121,24 +122,27 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
   auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   grow(pp_max, s);
-  row_stem_ = add_conv_row(prof, "0", stem_, s);
+  row_stem_ = add_conv_row(prof, prefix_ + "0", stem_, s);
   scratch_ = ConvScratch();
   scratch_.require(stem_, s.w);
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
-    const std::string name = std::to_string(i + 1) + ".";
+    // InvertedResidual.block: [expand], depthwise, [squeeze-excitation], project.
+    int part = 0;
+    auto next = [&] { return prefix_ + std::to_string(i + 1) + ".block." + std::to_string(part++); };
     if (b.has_expand) {
       scratch_.require(b.expand, s.w);
       b.a = {1, s.h, s.w, b.exp};
       grow(a_max, b.a);
-      b.row_expand = add_conv_row(prof, name + "expand", b.expand, b.a);
+      b.row_expand = add_conv_row(prof, next(), b.expand, b.a);
     }
     s = dwconv_output_shape({1, s.h, s.w, b.exp}, b.dw.params());
     b.b = s;
     grow(b_max, s);
+    const std::string dw_name = next();
     if (prof) {
       const DwConvParams& d = b.dw.params();
-      b.row_dw = prof->add(name + "dw", "dwconv " + std::to_string(d.kh) + "x" + std::to_string(d.kw) + "/" +
+      b.row_dw = prof->add(dw_name, "dwconv " + std::to_string(d.kh) + "x" + std::to_string(d.kw) + "/" +
                                             std::to_string(d.stride_h),
                            nchw_str(s), 2.0 * s.count() * d.kh * d.kw);
     }
@@ -146,12 +150,13 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
       b.pooled.resize({1, 1, 1, b.exp});
       b.squeezed.resize({1, 1, 1, b.se});
       b.excited.resize({1, 1, 1, b.exp});
-      if (prof) b.row_se = prof->add(name + "se", "squeeze-excitation", nchw_str(s), 0);
+      const std::string se_name = next();
+      if (prof) b.row_se = prof->add(se_name, "squeeze-excitation", nchw_str(s), 0);
     }
     scratch_.require(b.project, s.w);
     s.c = b.cout;
     b.out = s;
-    b.row_project = add_conv_row(prof, name + "project", b.project, s);
+    b.row_project = add_conv_row(prof, next(), b.project, s);
     if (i == kC13Block) c13_out_.resize(s);
     else grow(pp_max, s);
   }

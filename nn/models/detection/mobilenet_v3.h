@@ -26,6 +26,7 @@ class MobileNetV3Backbone : public Backbone {
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
 
  private:
+  std::string prefix_;  // "backbone.body."; profile rows use torchvision's module names
   struct Block {
     int cin = 0, exp = 0, cout = 0, k = 3, stride = 1, se = 0;
     Act act = Act::Relu;
