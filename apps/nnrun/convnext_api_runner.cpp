@@ -52,6 +52,7 @@ class ConvNeXtApiRunner : public Runner {
     std::snprintf(buf, sizeof buf, "ConvNeXt %s, %s, packed weights %.1f MB (through the API)",
                   cfg.describe().c_str(), nn::precision_name(options.precision), info.weight_bytes / 1e6);
     description_ = buf;
+    dump_path_ = nn::ConvNeXt::dump_path_of(options.precision);
   }
 
   std::vector<std::string> used_tensors() const override { return {}; }
@@ -84,6 +85,9 @@ class ConvNeXtApiRunner : public Runner {
       session_->set_dump(nullptr, nullptr);
   }
 
+  // The engine object behind the session, as the API builds it (the text only).
+  std::string dump_path() const override { return dump_path_; }
+
   void write_outputs(weights::Writer& out) const override {
     out.add_f32("features", {shape_[0], shape_[1], shape_[2], shape_[3]}, out_.data());
   }
@@ -96,6 +100,7 @@ class ConvNeXtApiRunner : public Runner {
   }
 
   nn::DumpSink* dump_ = nullptr;
+  std::string dump_path_;
   std::string path_;
   RunOptions options_;
   roadnn::Model model_;

@@ -195,7 +195,10 @@ int main(int argc, char** argv) {
                    nn::isa_name(nn::active_isa()), nn::num_threads(),
                    nn::winograd_enabled() ? "" : ", 3x3 convolutions direct");
 
-    if (dump) runner->set_dump(dump.get());
+    if (dump) {
+      runner->set_dump(dump.get());
+      dump->set_path(runner->dump_path());
+    }
     runner->forward();
     if (dump) {
       runner->set_dump(nullptr);  // the timed passes below run without it

@@ -38,6 +38,8 @@ class Runner {
   // The next forward's intermediate tensors go to `dump` (null: off); notes the
   // dump's metadata (dump.path) on it.
   virtual void set_dump(nn::DumpSink* dump) = 0;
+  // The dump.path metadata: "fused", or what the model computes apart for the dump.
+  virtual std::string dump_path() const { return "fused"; }
   // Also write the RPN proposals; false when the model has none.
   virtual bool enable_proposal_dump() { return false; }
 };

@@ -202,8 +202,16 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
       blk.dw_name = b + "block.0";
       // LayerNorm (affine folded into pw1), pw1, GELU, pw2, the layer scale (folded into
       // pw2) and the residual run as one fused tile: the block output stands for them all.
-      blk.covers = module_list(b, {"block", "block.1", "block.2", "block.3", "block.4", "block.5", "block.6",
-                                   "stochastic_depth"});
+      blk.covers = module_list(b, {"block", "block.5", "block.6", "stochastic_depth"});
+      blk.perm_name = b + "block.1";
+      blk.ln_name = b + "block.2";
+      blk.pw1_name = b + "block.3";
+      blk.gelu_name = b + "block.4";
+      blk.ln_gamma = load_vec(st, b + "block.2.weight");
+      blk.ln_beta = load_vec(st, b + "block.2.bias");
+      if (precision_ == Precision::Bf16)  // no unfused dump layers in bf16: the tile covers them
+        blk.covers = module_list(b, {"block", "block.1", "block.2", "block.3", "block.4", "block.5", "block.6",
+                                     "stochastic_depth"});
       DwConvParams dp;  // 7x7, stride 1, pad 3
       auto dw = st.f32(b + "block.0.weight");
       auto dwb = st.f32(b + "block.0.bias");
@@ -226,7 +234,7 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
         blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
         weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
       }
-      count(49 * c + c + 4 * c + c);  // dw, dw bias, b1, b2
+      count(49 * c + c + 4 * c + c + 2 * c);  // dw, dw bias, b1, b2, LayerNorm affine (dumps)
       stage.blocks.push_back(std::move(blk));
     }
     stages_.push_back(std::move(stage));
@@ -449,7 +457,10 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
     Profiler::Scope t(&prof_, b.prof_dw);
     dwconv(ConstTensorView(act_a_.data(), s), b.dw, TensorView{act_b_.data(), s});
   }
-  if (dump_) dump_nhwc(dump_, b.dw_name, ConstTensorView(act_b_.data(), s));
+  if (dump_) {
+    dump_nhwc(dump_, b.dw_name, ConstTensorView(act_b_.data(), s));
+    if (precision_ == Precision::F32) dump_mlp_layers(b, s);
+  }
   Profiler::Scope t(&prof_, b.prof_mlp);
   const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
   if (const std::size_t tile = fused_mlp_rows(m, c, planned_threads_)) {
@@ -486,6 +497,41 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
   }
   gemm_parallel(rows, sc.ln, c, b.pw1, sc.hid, 4 * c, e1);
   gemm_parallel(rows, sc.hid, 4 * c, b.pw2, act_a_.data(), c, e2);
+}
+
+std::string ConvNeXt::dump_path_of(Precision precision) {
+  if (precision == Precision::Bf16)
+    return "fused (bf16: each ConvNeXt block output covers its whole MLP, block.1 to block.6)";
+  return "fused, plus for the dump each ConvNeXt block's block.1 to block.4 (permute, LayerNorm with its own "
+         "affine, Linear, GELU) computed layer by layer from the depthwise output beside the fused tile, which "
+         "computes the block output (block.5, block.6, layer scale and residual)";
+}
+
+// The MLP's first layers for the dump, as the layer-by-layer path computes them (the
+// same kernels as the fused tile, so block.4 is bitwise the tile's hidden rows).
+void ConvNeXt::dump_mlp_layers(const Block& b, Shape s) {
+  if (!dump_->wants(b.perm_name) && !dump_->wants(b.ln_name) && !dump_->wants(b.pw1_name) &&
+      !dump_->wants(b.gelu_name))
+    return;
+  const int c = s.c;
+  const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
+  float* ln = dump_->scratch(m * c * 6);  // normalised, affine, hidden
+  float* affine = ln + m * c;
+  float* hid = affine + m * c;
+  const float* dw = act_b_.data();
+  dump_nhwc_as_nhwc(dump_, b.perm_name, ConstTensorView(dw, s));
+  layernorm_parallel(m, c, dw, c, ln, c, nullptr, nullptr, cfg_.eps);
+  layernorm_parallel(m, c, dw, c, affine, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  dump_nhwc_as_nhwc(dump_, b.ln_name, ConstTensorView(affine, s));
+  const Shape hs{s.n, s.h, s.w, 4 * c};
+  const int rows = static_cast<int>(m);
+  GemmEpilogue e1;
+  e1.bias = b.b1.data();
+  gemm_parallel(rows, ln, c, b.pw1, hid, 4 * c, e1);
+  dump_nhwc_as_nhwc(dump_, b.pw1_name, ConstTensorView(hid, hs));
+  e1.act = Act::Gelu;
+  gemm_parallel(rows, ln, c, b.pw1, hid, 4 * c, e1);
+  dump_nhwc_as_nhwc(dump_, b.gelu_name, ConstTensorView(hid, hs));
 }
 
 ConstTensorView ConvNeXt::forward(const float* input_nchw) {

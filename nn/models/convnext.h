@@ -78,8 +78,13 @@ class ConvNeXt {
   // Names are torchvision's `features.*` module names (nn/dump.h); the stem, every
   // downsampling layer, every block's depthwise output `features.S.B.block.0` and
   // block output `features.S.B`, every stage `features.S` and `features`.
+  // With a sink, each block's MLP also runs layer by layer up to its GELU for the dump
+  // (block.1 .. block.4, channels-last [N, H, W, C] as in PyTorch; f32 only): the
+  // dump.path text below says so.
   void set_dump(DumpSink* sink) { dump_ = sink; }
   DumpSink* dump() const { return dump_; }
+  std::string dump_path() const { return dump_path_of(precision_); }
+  static std::string dump_path_of(Precision precision);
 
  private:
   // LayerNorm's gamma/beta are folded into pw1 and the layer scale into pw2 at load
@@ -93,6 +98,10 @@ class ConvNeXt {
     int prof_dw = -1, prof_mlp = -1;
     // PyTorch names: "features.S.B", its depthwise conv, and what the fused MLP covers.
     std::string name, dw_name, covers;
+    // Dumps only: the MLP's first layers as PyTorch runs them (block.1 .. block.4) and
+    // the LayerNorm's own affine (the fused path has it folded into pw1).
+    std::string perm_name, ln_name, pw1_name, gelu_name;
+    AlignedBuffer ln_gamma, ln_beta;
   };
   struct Stage {
     int dim = 0;
@@ -108,6 +117,7 @@ class ConvNeXt {
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
   void run_block(const Block& b, Shape s);
+  void dump_mlp_layers(const Block& b, Shape s);
   // Scratch of one MLP tile (or of all rows on the unfused path): the normalised rows,
   // the hidden rows and, for bf16, both again in bfloat16.
   struct MlpScratch {

@@ -44,11 +44,15 @@ TEST(ApiDump, ConvNeXtBlocksInNetworkOrderAndTheLastIsTheOutput) {
   ASSERT_EQ(ROADNN_OK, roadnn_session_set_dump(s.get(), collect, &d));
   ASSERT_EQ(ROADNN_OK, roadnn_convnext_run(s.get(), x.data(), x.size(), y.data(), y.size())) << roadnn_last_error();
   // small_convnext(): 4 stages of one block each.
-  const std::vector<std::string> want = {
-      "features.0",           "features.1.0.block.0", "features.1.0", "features.1",           "features.2",
-      "features.3.0.block.0", "features.3.0",         "features.3",   "features.4",           "features.5.0.block.0",
-      "features.5.0",         "features.5",           "features.6",   "features.7.0.block.0", "features.7.0",
-      "features.7",           "features"};
+  std::vector<std::string> want = {"features.0"};
+  for (int stage = 1; stage <= 7; stage += 2) {
+    if (stage > 1) want.push_back("features." + std::to_string(stage - 1));
+    const std::string b = "features." + std::to_string(stage) + ".0";
+    for (int layer = 0; layer <= 4; ++layer) want.push_back(b + ".block." + std::to_string(layer));
+    want.push_back(b);
+    want.push_back("features." + std::to_string(stage));
+  }
+  want.push_back("features");
   EXPECT_EQ(d.order, want);
   EXPECT_EQ(d.shapes["features.0"], (std::vector<std::int64_t>{1, 8, kConvH / 4, kConvW / 4}));
   EXPECT_EQ(d.shapes["features"], (std::vector<std::int64_t>{shape[0], shape[1], shape[2], shape[3]}));
@@ -56,6 +60,7 @@ TEST(ApiDump, ConvNeXtBlocksInNetworkOrderAndTheLastIsTheOutput) {
   EXPECT_TRUE(d.data["features"] == y);
   EXPECT_TRUE(d.data["features.7"] == d.data["features.7.0"]);
   EXPECT_NE(d.covers["features.1.0"].find("features.1.0.block.5"), std::string::npos) << d.covers["features.1.0"];
+  EXPECT_EQ(d.shapes["features.1.0.block.4"], (std::vector<std::int64_t>{1, kConvH / 4, kConvW / 4, 32}));
   EXPECT_EQ(d.covers["features.1.0.block.0"], "");
   // Dumping changes nothing in the result; off again, the callback is not called.
   std::vector<float> y2(y.size());

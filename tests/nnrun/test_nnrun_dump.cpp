@@ -78,7 +78,8 @@ class NnrunDump : public testing::Test {
       if (s > 0) n.push_back("features." + std::to_string(2 * s));
       const std::string stage = "features." + std::to_string(2 * s + 1);
       for (int b = 0; b < cfg.depths[s]; ++b) {
-        n.push_back(stage + "." + std::to_string(b) + ".block.0");
+        for (int layer = 0; layer <= 4; ++layer)  // depthwise, then the MLP up to its GELU
+          n.push_back(stage + "." + std::to_string(b) + ".block." + std::to_string(layer));
         n.push_back(stage + "." + std::to_string(b));
       }
       n.push_back(stage);
@@ -98,19 +99,35 @@ TEST_F(NnrunDump, ConvNeXtEveryBlockInNetworkOrderWithMetadata) {
   const auto& meta = d.metadata();
   EXPECT_EQ(meta.at("dump.source"), "roadnn");
   EXPECT_EQ(meta.at("dump.model"), "convnext");
-  EXPECT_EQ(meta.at("dump.path"), "fused");
+  EXPECT_EQ(meta.at("dump.path").rfind("fused, plus for the dump", 0), 0u) << meta.at("dump.path");
   EXPECT_EQ(split(meta.at("dump.order"), ','), convnext_names());
   EXPECT_EQ(d.names().size(), convnext_names().size());
   EXPECT_EQ(meta.at("dump.covers.features.0"), "features.0.0,features.0.1");
   EXPECT_EQ(meta.at("dump.covers.features.4"), "features.4.0,features.4.1");
   const auto covers = split(meta.at("dump.covers.features.5.1"), ',');
-  for (const char* m : {"features.5.1.block.2", "features.5.1.block.5", "features.5.1.stochastic_depth"})
+  for (const char* m : {"features.5.1.block", "features.5.1.block.5", "features.5.1.block.6",
+                        "features.5.1.stochastic_depth"})
     EXPECT_NE(std::find(covers.begin(), covers.end(), m), covers.end()) << m;
+  EXPECT_EQ(std::find(covers.begin(), covers.end(), "features.5.1.block.2"), covers.end()) << "dumped on its own";
   EXPECT_EQ(meta.count("dump.covers.features.5.1.block.0"), 0u);
   // NCHW as PyTorch returns them: stride 4 stem, 7x7 depthwise keeps the shape.
   EXPECT_EQ(d.info("features.0").shape, (std::vector<std::int64_t>{1, 8, 16, 24}));
   EXPECT_EQ(d.info("features.3.0.block.0").shape, (std::vector<std::int64_t>{1, 12, 8, 12}));
   EXPECT_EQ(d.info("features.7.0").shape, (std::vector<std::int64_t>{1, 28, 2, 3}));
+  // Inside the permuted MLP, channels last as PyTorch has them: block.1 is block.0 permuted.
+  EXPECT_EQ(d.info("features.3.0.block.1").shape, (std::vector<std::int64_t>{1, 8, 12, 12}));
+  EXPECT_EQ(d.info("features.3.0.block.4").shape, (std::vector<std::int64_t>{1, 8, 12, 48}));
+  {
+    const auto nchw = d.f32("features.3.0.block.0"), nhwc = d.f32("features.3.0.block.1");
+    for (int ch = 0; ch < 12; ++ch)
+      for (int p = 0; p < 8 * 12; ++p) ASSERT_EQ(nchw[ch * 96 + p], nhwc[p * 12 + ch]) << ch << " " << p;
+    // GELU of the Linear: negative inputs shrink towards zero, positive ones barely move.
+    const auto pre = d.f32("features.3.0.block.3"), post = d.f32("features.3.0.block.4");
+    for (std::size_t i = 0; i < pre.size(); ++i) {
+      ASSERT_LE(post[i], std::max(pre[i], 0.0f) + 1e-6f) << i;
+      ASSERT_GE(post[i], -0.17f) << i;
+    }
+  }
   // The last tensor is the model's output, bitwise (NCHW checked against --output); a
   // stage is its last block.
   EXPECT_TRUE(d.f32("features") == y.f32("features"));
@@ -140,8 +157,8 @@ TEST_F(NnrunDump, FilterSearchesNames) {
   // Search semantics: a bare fragment matches anywhere in the name.
   ASSERT_EQ(run("--dump " + path("e.safetensors") + " --dump-filter block").code, 0);
   weights::SafeTensors e = weights::SafeTensors::load(path("e.safetensors"));
-  EXPECT_EQ(e.names().size(), 5u);
-  for (const auto& n : e.names()) EXPECT_NE(n.find(".block.0"), std::string::npos) << n;
+  EXPECT_EQ(e.names().size(), 25u);  // block.0 .. block.4 of 5 blocks
+  for (const auto& n : e.names()) EXPECT_NE(n.find(".block."), std::string::npos) << n;
 }
 
 TEST_F(NnrunDump, FilterErrorsWriteNothing) {
@@ -235,6 +252,8 @@ TEST_F(NnrunDump, ProfileJsonParsesAndNamesTheDumpsTensors) {
   for (const auto& n : convnext_names()) {
     const bool stage = n == "features" || n == "features.1" || n == "features.3" || n == "features.5" ||
                        n == "features.7";  // a stage is its last block: no row of its own
+    const bool mlp_layer = n.find(".block.") != std::string::npos && n.find(".block.0") == std::string::npos;
+    if (mlp_layer) continue;  // computed for the dump only; the fused tile's row is the block
     if (!stage) EXPECT_TRUE(names.count(n)) << n;
   }
 }
