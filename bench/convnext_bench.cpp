@@ -132,9 +132,9 @@ BENCHMARK(BM_ConvNeXtTinyBf16)
 // block boundary; these cases put a forward of a model whose dump was never set beside
 // one whose dump was set and switched off again (the state nnrun and an API session are
 // in after a dumping run), and, for scale, one dumping every tensor to a sink that
-// discards them (the NHWC -> NCHW conversions). Run on a quiet machine, e.g.
-//   nn_bench --benchmark_filter=ConvNeXtDump --benchmark_repetitions=10 \
-//            --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true
+// discards them (the NHWC -> NCHW conversions). Run on a quiet machine, e.g. with
+//   --benchmark_filter=ConvNeXtDump --benchmark_repetitions=10
+//   --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true
 // and compare the medians of Never and SwitchedOff (equal within noise).
 struct DiscardingSink : nn::DumpSink {
   bool wants(const std::string&) const override { return true; }
