@@ -9,11 +9,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "nn/layout.h"
 #include "nn/models/convnext.h"
 #include "nn/models/stixel_head.h"
 #include "nn/models/synthetic_weights.h"
@@ -293,6 +295,73 @@ TEST_F(NnrunDump, HelpNamesTheNewOptionsAndStixelNExT) {
   const std::string all = r.out + r.err;
   for (const char* s : {"--dump ", "--dump-filter", "--format", "--profile-out", "stixelnext"})
     EXPECT_NE(all.find(s), std::string::npos) << s;
+}
+
+}  // namespace
+
+// The engine's dump of ConvNeXt-Tiny at a small input against direct computations: a
+// ConvNeXt holding only the first k stages of the same weights is an independent
+// forward whose output must be the dump's stage tensor features.(2k-1), bitwise, in
+// NCHW; the last tensor is the model's own output.
+namespace {
+
+struct CollectingSink : nn::DumpSink {
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<float>> data;
+  std::map<std::string, std::vector<std::int64_t>> shapes;
+  bool wants(const std::string&) const override { return true; }
+  void tensor(const std::string& name, const std::vector<std::int64_t>& shape, const float* d,
+              const std::string&) override {
+    std::size_t n = 1;
+    for (auto s : shape) n *= static_cast<std::size_t>(s);
+    order.push_back(name);
+    data[name].assign(d, d + n);
+    shapes[name] = shape;
+  }
+};
+
+std::vector<float> nchw_of(const nn::ConstTensorView& v) {
+  std::vector<float> out(v.count());
+  nn::nhwc_to_nchw(v.data, v.shape.n, v.shape.c, v.shape.h, v.shape.w, out.data());
+  return out;
+}
+
+TEST(ConvNeXtDump, TinyStagesEqualTruncatedModelsBitwise) {
+  const nn::ConvNeXtConfig tiny = nn::convnext_tiny_config();
+  const auto full = weights::SafeTensors::from_bytes(
+      nn::synthetic_weights(nn::convnext_tensor_specs(tiny, "features."), 11).bytes(), "synthetic tiny");
+  std::vector<float> x(2 * 3 * 64 * 96);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<float>((i * 7919) % 1000) / 500.0f - 1.0f;
+  nn::ConvNeXt model(full);
+  model.plan(2, 64, 96);
+  CollectingSink sink;
+  model.set_dump(&sink);
+  const std::vector<float> y = nchw_of(model.forward(x.data()));
+  // stem, 3 downsampling layers, 18 blocks x (block.0 .. block.4, the block), 4 stages, features
+  ASSERT_EQ(sink.order.size(), 1u + 3 + 18 * 6 + 4 + 1);
+  EXPECT_EQ(sink.order.back(), "features");
+  EXPECT_TRUE(sink.data["features"] == y);
+  EXPECT_EQ(sink.shapes["features"], (std::vector<std::int64_t>{2, 768, 2, 3}));
+  for (int k = 1; k <= 3; ++k) {
+    nn::ConvNeXtConfig part{std::vector<int>(tiny.dims.begin(), tiny.dims.begin() + k),
+                            std::vector<int>(tiny.depths.begin(), tiny.depths.begin() + k)};
+    weights::Writer w;
+    for (const auto& s : nn::convnext_tensor_specs(part, "features.")) w.add_f32(s.name, s.shape, full.f32(s.name).data());
+    const auto st = weights::SafeTensors::from_bytes(w.bytes(), "first stages");
+    nn::ConvNeXt truncated(st);
+    ASSERT_EQ(truncated.config().dims.size(), static_cast<std::size_t>(k));
+    truncated.plan(2, 64, 96);
+    const std::string stage = "features." + std::to_string(2 * k - 1);
+    const std::string last_block = stage + "." + std::to_string(tiny.depths[k - 1] - 1);
+    const std::vector<float> direct = nchw_of(truncated.forward(x.data()));
+    EXPECT_TRUE(sink.data[stage] == direct) << stage;
+    EXPECT_TRUE(sink.data[last_block] == direct) << last_block;
+    const nn::Shape s = truncated.output_shape();
+    EXPECT_EQ(sink.shapes[stage], (std::vector<std::int64_t>{s.n, s.c, s.h, s.w})) << stage;
+  }
+  // Dumping changes nothing: the same model without the sink gives the same bits.
+  model.set_dump(nullptr);
+  EXPECT_TRUE(nchw_of(model.forward(x.data())) == y);
 }
 
 }  // namespace
