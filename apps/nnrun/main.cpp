@@ -37,9 +37,9 @@ const std::vector<ModelInfo>& models() {
       {"convnext_base", "torchvision convnext_base().features", make_convnext, true, make_convnext_api},
       {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext, true, make_convnext_api},
       {"stixelnext",
-       "StixelNExT++ network (authors' model): input [N,3,H,W] as the weights expect it (raw 0..255) -> "
-       "prediction [N,A,64,U] after the sigmoid (A = 4 for head v4, else 3; U and the head from the weights'\n"
-       "      stixelnext.columns / stixel_width / head metadata, default U = W/8)",
+       "StixelNExT++ network (the authors' model): input [N,3,H,W] as the weights expect it (raw 0..255)\n"
+       "      -> prediction [N,A,64,U] after the sigmoid (A = 4 for head v4, else 3); U and the head from the\n"
+       "      weights' stixelnext.columns / stixel_width / head metadata (default U = W / 8)",
        make_stixelnext, true, nullptr},
       {"fasterrcnn_mobilenet_v3_large_fpn",
        "torchvision Faster R-CNN, MobileNetV3-Large FPN: input [1,3,H,W] RGB in [0,1] -> boxes [K,4], scores [K], "
