@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "nn/dump.h"
 #include "nn/exec.h"
 #include "nn/models/convnext.h"
 #include "nn/models/detection/faster_rcnn.h"
@@ -26,6 +27,25 @@ struct roadnn_model {
   std::size_t weight_bytes = 0;
 };
 
+namespace roadnn_api {
+
+// roadnn_session_set_dump's callback as the engine's dump receiver.
+class CallbackDump : public nn::DumpSink {
+ public:
+  CallbackDump(roadnn_dump_fn fn, void* user) : fn_(fn), user_(user) {}
+  bool wants(const std::string&) const override { return true; }
+  void tensor(const std::string& name, const std::vector<std::int64_t>& shape, const float* data,
+              const std::string& covers) override {
+    fn_(name.c_str(), shape.data(), static_cast<int>(shape.size()), data, covers.c_str(), user_);
+  }
+
+ private:
+  roadnn_dump_fn fn_;
+  void* user_;
+};
+
+}  // namespace roadnn_api
+
 struct roadnn_session {
   const roadnn_model* model = nullptr;
   nn::ExecOptions exec;  // the model's ISA cap and Winograd choice, the session's threads
@@ -37,6 +57,7 @@ struct roadnn_session {
   std::vector<float> planar;             // detector input [3, h, w]
   std::vector<roadnn_stixel> stixels;
   std::vector<roadnn_detection> detections;
+  std::unique_ptr<roadnn_api::CallbackDump> dump;  // null: off
 };
 
 namespace roadnn_api {

@@ -1,12 +1,12 @@
-// The machine's FP32 FMA peak, measured once per thread count with a register-only
-// FMA loop of the widest ISA available, so "% of peak" counters hold on any CPU.
+// The machine's FP32 FMA peak (nn/peak.h, shared with nnrun --profile) as benchmark
+// counters, so "% of peak" counters hold on any CPU.
 #pragma once
 
 #include <benchmark/benchmark.h>
 
 namespace nnbench {
 
-// GFLOP/s with `threads` threads (cached per thread count).
+// GFLOP/s with `threads` threads (nn::peak_gflops).
 double peak_gflops(int threads);
 
 // Sets the counters GFLOP/s and pct_peak on a benchmark that performs

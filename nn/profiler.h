@@ -11,12 +11,17 @@
 namespace nn {
 
 struct ProfileEntry {
-  std::string layer;   // e.g. "features.1.0"
+  std::string layer;   // PyTorch module name of the output, as dumps name it: "features.1.0"
   std::string op;      // e.g. "dwconv 7x7"
   std::string shape;   // output shape, NCHW like PyTorch prints it
   double flops = 0;    // per call
+  // Estimated bytes moved per call: inputs, weights and outputs each read or written
+  // once (no cache effects, no scratch); 0 when unknown.
+  double bytes = 0;
   double total_ms = 0;
   int calls = 0;
+  // Per-call times (ms), kept when reserve_samples() made room: min/median/max over runs.
+  std::vector<double> samples;
 };
 
 // An NHWC shape as PyTorch prints the NCHW tensor: "[n, c, h, w]".
@@ -26,8 +31,11 @@ class Profiler {
  public:
   void clear() { entries_.clear(); }
   // Registers an entry at planning time; returns its index.
-  int add(std::string layer, std::string op, std::string shape, double flops);
+  int add(std::string layer, std::string op, std::string shape, double flops, double bytes = 0);
+  // Clears the times; per-call samples are kept for up to `calls` calls per entry from
+  // now on (storage reserved here, so timing still allocates nothing).
   void reset_times();
+  void reserve_samples(int calls);
   bool enabled() const { return enabled_; }
   void set_enabled(bool on) { enabled_ = on; }
   const std::vector<ProfileEntry>& entries() const { return entries_; }
@@ -45,8 +53,10 @@ class Profiler {
     void stop() {
       if (!p_) return;
       auto& e = p_->entries_[index_];
-      e.total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+      e.total_ms += ms;
       e.calls += 1;
+      if (e.samples.size() < e.samples.capacity()) e.samples.push_back(ms);
       p_ = nullptr;
     }
     Scope(const Scope&) = delete;

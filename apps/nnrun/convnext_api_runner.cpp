@@ -1,6 +1,7 @@
 // The plain ConvNeXt runs of nnrun (no --profile) go through the public API
 // (roadnn.hpp), as an embedder's program would: the API loads and validates the
-// weights, the session plans the arena and owns the threads. --profile needs the
+// weights, the session plans the arena and owns the threads; --dump uses the session's
+// dump callback. --profile needs the
 // engine's per-layer profiler, which the API does not expose, and keeps the
 // internal runner (convnext_runner.cpp).
 #include <cstdio>
@@ -51,6 +52,7 @@ class ConvNeXtApiRunner : public Runner {
     std::snprintf(buf, sizeof buf, "ConvNeXt %s, %s, packed weights %.1f MB (through the API)",
                   cfg.describe().c_str(), nn::precision_name(options.precision), info.weight_bytes / 1e6);
     description_ = buf;
+    dump_path_ = nn::ConvNeXt::dump_path_of(options.precision);
   }
 
   std::vector<std::string> used_tensors() const override { return {}; }
@@ -74,11 +76,31 @@ class ConvNeXtApiRunner : public Runner {
     roadnn::check(roadnn_convnext_run(session_->get(), input_.data(), input_.size(), out_.data(), out_.size()));
   }
 
+  // Through the API's dump callback, as an embedder would.
+  void set_dump(nn::DumpSink* dump) override {
+    dump_ = dump;
+    if (dump)
+      session_->set_dump(&ConvNeXtApiRunner::on_tensor, this);
+    else
+      session_->set_dump(nullptr, nullptr);
+  }
+
+  // The engine object behind the session, as the API builds it (the text only).
+  std::string dump_path() const override { return dump_path_; }
+
   void write_outputs(weights::Writer& out) const override {
     out.add_f32("features", {shape_[0], shape_[1], shape_[2], shape_[3]}, out_.data());
   }
 
  private:
+  static void on_tensor(const char* name, const std::int64_t* shape, int rank, const float* data, const char* covers,
+                        void* self) {
+    nn::DumpSink* dump = static_cast<ConvNeXtApiRunner*>(self)->dump_;
+    if (dump->wants(name)) dump->tensor(name, std::vector<std::int64_t>(shape, shape + rank), data, covers);
+  }
+
+  nn::DumpSink* dump_ = nullptr;
+  std::string dump_path_;
   std::string path_;
   RunOptions options_;
   roadnn::Model model_;

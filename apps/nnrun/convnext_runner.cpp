@@ -52,6 +52,8 @@ class ConvNeXtRunner : public Runner {
   }
 
   nn::Profiler* profiler() override { return &model_.profiler(); }
+  void set_dump(nn::DumpSink* dump) override { model_.set_dump(dump); }
+  std::string dump_path() const override { return model_.dump_path(); }
 
  private:
   nn::ConvNeXt model_;

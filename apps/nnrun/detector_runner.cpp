@@ -82,6 +82,7 @@ class DetectorRunner : public Runner {
   }
 
   nn::Profiler* profiler() override { return &model_.profiler(); }
+  void set_dump(nn::DumpSink* dump) override { model_.set_dump(dump); }
   nn::Profiler* layer_profiler() override { return &model_.layer_profiler(); }
 
  private:

@@ -6,6 +6,9 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <memory>
+#include <regex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,8 +18,11 @@
 #include "apps/common/precision_option.h"
 #include "apps/common/unused_tensors.h"
 #include "apps/nnrun/detector_runner.h"
+#include "apps/nnrun/dump_file.h"
+#include "apps/nnrun/profile_report.h"
 #include "apps/nnrun/runner.h"
 #include "nn/isa.h"
+#include "nn/peak.h"
 #include "nn/threads.h"
 #include "nn/winograd.h"
 #include "weights/safetensors.h"
@@ -30,6 +36,11 @@ const std::vector<ModelInfo>& models() {
       {"convnext_small", "torchvision convnext_small().features", make_convnext, true, make_convnext_api},
       {"convnext_base", "torchvision convnext_base().features", make_convnext, true, make_convnext_api},
       {"convnext", "any ConvNeXt features configuration (widths and depths read from the weights)", make_convnext, true, make_convnext_api},
+      {"stixelnext",
+       "StixelNExT++ network (the authors' model): input [N,3,H,W] as the weights expect it (raw 0..255)\n"
+       "      -> prediction [N,A,64,U] after the sigmoid (A = 4 for head v4, else 3); U and the head from the\n"
+       "      weights' stixelnext.columns / stixel_width / head metadata (default U = W / 8)",
+       make_stixelnext, true, nullptr},
       {"fasterrcnn_mobilenet_v3_large_fpn",
        "torchvision Faster R-CNN, MobileNetV3-Large FPN: input [1,3,H,W] RGB in [0,1] -> boxes [K,4], scores [K], "
        "labels [K] (I64) in input pixels",
@@ -62,17 +73,12 @@ double peak_rss_mb() {
   return ru.ru_maxrss / 1024.0;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   apps::apply_exec_environment("nnrun");
   std::string model, weights_path, input_path, output_path, isa_name, precision_name, conv3x3;
+  std::string dump_path, dump_filter, format = "table", profile_out;
   int threads = 0, repeat = 0;
   bool profile = false, quiet = false, dump_proposals = false;
 
@@ -89,6 +95,16 @@ int main(int argc, char** argv) {
   args.option("repeat", "R", "run the forward pass R more times; print peak_rss_mb= and, last,\n"
               "                            forward_ms min=.. median=.. max=.. (forward only, no loading or I/O)", &repeat);
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
+  args.option("format", "F", "--profile output: table (default, for people), json or csv: per layer the PyTorch\n"
+              "                            module name (as --dump names it), op, shape, FLOPs, bytes moved, ms min/median/max\n"
+              "                            over the timed calls, GFLOP/s and percent of the FMA peak measured in this run",
+              &format);
+  args.option("profile-out", "FILE", "write the --profile json/csv there instead of to stdout", &profile_out);
+  args.option("dump", "FILE", "also write every intermediate tensor of the first forward pass that has a PyTorch\n"
+              "                            counterpart, under its module name and in PyTorch's layout (safetensors; see\n"
+              "                            docs/NUMERICS.md for the names and the dump.* metadata)", &dump_path);
+  args.option("dump-filter", "REGEX", "--dump only the tensors whose names contain a match of REGEX (ECMAScript)",
+              &dump_filter);
   args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
   args.option("precision", "P", std::string("ConvNeXt models: ") + apps::kPrecisionHelp, &precision_name);
   args.option("conv3x3", "ALGO", "3x3 stride-1 convolutions (detectors): winograd (default; F(4x4,3x3), a quarter\n"
@@ -102,7 +118,9 @@ int main(int argc, char** argv) {
   for (const char* r : {"model", "weights", "input", "output"}) args.required(r);
   args.epilog(model_list +
               "\nexample:\n  nnrun --model convnext_tiny --weights convnext_tiny.safetensors \\\n"
-              "        --input x.safetensors --output y.safetensors --threads 2 --repeat 5");
+              "        --input x.safetensors --output y.safetensors --threads 2 --repeat 5\n"
+              "  nnrun --model convnext_tiny ... --dump d.safetensors --dump-filter '^features\\.[0-9]+$'\n"
+              "  nnrun --model convnext_tiny ... --profile --repeat 10 --format json --profile-out t.json");
   args.parse(argc, argv);
 
   const nnrun::ModelInfo* info = nullptr;
@@ -112,6 +130,18 @@ int main(int argc, char** argv) {
   if (repeat < 0) args.fail("--repeat must be >= 0");
   for (const std::string* p : {&weights_path, &input_path, &output_path})
     if (p->empty()) args.fail("--weights, --input and --output must not be empty");
+  if (format != "table" && format != "json" && format != "csv") args.fail("--format must be table, json or csv");
+  if (format != "table" && !profile) args.fail("--format " + format + " needs --profile");
+  if (!profile_out.empty() && format == "table") args.fail("--profile-out needs --profile --format json or csv");
+  if (!dump_filter.empty() && dump_path.empty()) args.fail("--dump-filter needs --dump FILE");
+  std::unique_ptr<nnrun::DumpFile> dump;
+  if (!dump_path.empty()) {
+    try {
+      dump = std::make_unique<nnrun::DumpFile>(model, dump_filter);
+    } catch (const std::regex_error& e) {
+      args.fail("--dump-filter '" + dump_filter + "' is not a valid regular expression (" + e.what() + ")");
+    }
+  }
   if (threads < 0) args.fail("--threads must be >= 0");
   if (!isa_name.empty()) {
     nn::Isa isa;
@@ -136,6 +166,8 @@ int main(int argc, char** argv) {
     plan.input(weights_path, "weights");
     plan.input(input_path, "input");
     plan.output(output_path);
+    if (dump) plan.output(dump_path);
+    if (!profile_out.empty()) plan.output(profile_out);
     plan.check();
     outputs::install_interrupt_cleanup();
 
@@ -163,12 +195,23 @@ int main(int argc, char** argv) {
                    nn::isa_name(nn::active_isa()), nn::num_threads(),
                    nn::winograd_enabled() ? "" : ", 3x3 convolutions direct");
 
+    if (dump) {
+      runner->set_dump(dump.get());
+      dump->set_path(runner->dump_path());
+    }
     runner->forward();
+    if (dump) {
+      runner->set_dump(nullptr);  // the timed passes below run without it
+      if (dump->count() == 0)
+        throw std::runtime_error("--dump-filter '" + dump_filter + "' matches none of the tensors model '" + model +
+                                 "' dumps (nothing written)");
+    }
     weights::Writer out;
     out.set_metadata("format", "roadnn-v1");
     out.set_metadata("model", model);
     runner->write_outputs(out);
     out.write(output_path, &outputs::temporary_file_hooks());
+    if (dump) dump->write(dump_path);
 
     if (repeat > 0 || profile) {
       if (nn::Profiler* table = runner->profiler()) {
@@ -182,21 +225,42 @@ int main(int argc, char** argv) {
       }
       std::vector<double> ms;
       const int passes = std::max(repeat, 1);
+      // Per-call samples for min/median/max, room made before the timed passes.
+      for (nn::Profiler* p : {runner->profiler(), layers})
+        if (p && profile) p->reserve_samples(passes);
       for (int i = 0; i < passes; ++i) {
         auto t0 = std::chrono::steady_clock::now();
         runner->forward();
         ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       }
-      if (profile) {
+      // Machine-readable output on stdout takes stdout alone; the text lines go to stderr.
+      std::FILE* text = (profile && format != "table" && profile_out.empty()) ? stderr : stdout;
+      if (profile && format == "table") {
         std::fputs(runner->profiler()->table().c_str(), stdout);
         if (layers) std::printf("\nby layer:\n%s", layers->table().c_str());
+      } else if (profile) {
+        nnrun::ProfileRun run;
+        run.model = model;
+        run.isa = nn::isa_name(nn::active_isa());
+        run.threads = nn::num_threads();
+        run.passes = passes;
+        run.forward_min = *std::min_element(ms.begin(), ms.end());
+        run.forward_median = nnrun::median_of(ms);
+        run.forward_max = *std::max_element(ms.begin(), ms.end());
+        run.peak_gflops = nn::peak_gflops(run.threads);  // after the timed passes, same process
+        std::vector<nnrun::ProfileTable> tables{{runner->profiler(), "model"}};
+        if (layers) tables.push_back({layers, "layer"});
+        const std::string report =
+            format == "json" ? nnrun::profile_json(run, tables) : nnrun::profile_csv(run, tables);
+        if (profile_out.empty())
+          std::fputs(report.c_str(), stdout);
+        else
+          outputs::write_file(profile_out, report.data(), report.size());
       }
-      if (repeat > 0) {
-        std::printf("peak_rss_mb=%.1f\n", peak_rss_mb());
-      }
+      if (repeat > 0) std::fprintf(text, "peak_rss_mb=%.1f\n", peak_rss_mb());
       if (repeat > 0)
-        std::printf("forward_ms min=%.3f median=%.3f max=%.3f\n", *std::min_element(ms.begin(), ms.end()),
-                    median(ms), *std::max_element(ms.begin(), ms.end()));
+        std::fprintf(text, "forward_ms min=%.3f median=%.3f max=%.3f\n", *std::min_element(ms.begin(), ms.end()),
+                     nnrun::median_of(ms), *std::max_element(ms.begin(), ms.end()));
     }
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "nnrun: out of memory\n");

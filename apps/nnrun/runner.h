@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "nn/dump.h"
 #include "nn/isa.h"
 #include "nn/models/convnext.h"
 #include "nn/precision.h"
@@ -34,6 +35,11 @@ class Runner {
   virtual nn::Profiler* profiler() { return nullptr; }
   // A second, finer table (the detectors' backbone layers and RoI-head parts), or null.
   virtual nn::Profiler* layer_profiler() { return nullptr; }
+  // The next forward's intermediate tensors go to `dump` (null: off); notes the
+  // dump's metadata (dump.path) on it.
+  virtual void set_dump(nn::DumpSink* dump) = 0;
+  // The dump.path metadata: "fused", or what the model computes apart for the dump.
+  virtual std::string dump_path() const { return "fused"; }
   // Also write the RPN proposals; false when the model has none.
   virtual bool enable_proposal_dump() { return false; }
 };
@@ -65,6 +71,9 @@ std::unique_ptr<Runner> make_convnext(const std::string& name, const weights::Sa
                                       const RunOptions& options);
 std::unique_ptr<Runner> make_convnext_api(const std::string& name, const std::string& weights_path,
                                           const RunOptions& options);
+
+std::unique_ptr<Runner> make_stixelnext(const std::string& name, const weights::SafeTensors& w,
+                                        const RunOptions& options);
 
 // The configuration `name` (convnext_tiny/_small/_base) stands for; empty dims for
 // "convnext" (any configuration).

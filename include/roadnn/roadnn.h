@@ -154,6 +154,23 @@ ROADNN_API roadnn_status roadnn_session_create(const roadnn_model* model, const 
                                                roadnn_session** out);
 ROADNN_API void roadnn_session_free(roadnn_session* session);
 
+/* Intermediate tensors (numerics debugging, docs/NUMERICS.md). When a callback is set,
+ * every run of the session calls it once per intermediate tensor that has a PyTorch
+ * counterpart, in network order, on the calling thread, before the run returns:
+ *   name    the PyTorch module's qualified name ("features.1.0", "classifier.up",
+ *           "backbone.body.layer2.0", "rpn.head.cls_logits#2", "rpn.head[0][2]", ...)
+ *   shape   rank dimensions, exactly as the PyTorch module returns the tensor (NCHW for
+ *           convolutions and blocks)
+ *   data    the float32 elements in that layout, valid only during the call
+ *   covers  "" or, where the engine fuses layers, the comma-separated PyTorch modules
+ *           this tensor stands for
+ * Off by default (callback NULL); off costs nothing and a run allocates nothing. A set
+ * callback makes runs slower (layout conversion, and allocation on the first one). */
+typedef void (*roadnn_dump_fn)(const char* name, const int64_t* shape, int rank, const float* data,
+                               const char* covers, void* user_data);
+/* callback NULL switches the dump off. */
+ROADNN_API roadnn_status roadnn_session_set_dump(roadnn_session* session, roadnn_dump_fn callback, void* user_data);
+
 /* Interleaved 8-bit RGB in the caller's memory. stride: bytes per row, 0 = 3 * width. */
 typedef struct roadnn_image {
   const uint8_t* data;

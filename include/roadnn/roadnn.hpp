@@ -82,6 +82,9 @@ class Session {
     return *this;
   }
 
+  // Intermediate tensors of every run to `callback` (null: off), see roadnn_session_set_dump.
+  void set_dump(roadnn_dump_fn callback, void* user_data) { check(roadnn_session_set_dump(s_, callback, user_data)); }
+
   // ConvNeXt: NCHW in, NCHW out ([N, C, H/32, W/32]).
   std::vector<std::int64_t> convnext_output_shape() const {
     std::int64_t s[4];

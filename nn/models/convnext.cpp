@@ -165,6 +165,10 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
     weight_bytes_ += stem_w_.bytes();
     count(cfg_.dims[0]);
   }
+  // Dump and profile names: the weights' prefix ("features.") is torchvision's module path.
+  name_ = prefix.empty() ? "features" : prefix.substr(0, prefix.size() - (prefix.back() == '.' ? 1 : 0));
+  stem_name_ = prefix + "0";
+  stem_covers_ = module_list(prefix + "0.", {"0", "1"});
   stem_gamma_ = load_vec(st, prefix + "0.1.weight");
   stem_beta_ = load_vec(st, prefix + "0.1.bias");
   count(2 * cfg_.dims[0]);
@@ -172,10 +176,13 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
   for (std::size_t s = 0; s < cfg_.dims.size(); ++s) {
     Stage stage;
     stage.dim = cfg_.dims[s];
+    stage.name = prefix + std::to_string(2 * s + 1);
     const int c = stage.dim;
     if (s > 0) {
       const std::string d = prefix + std::to_string(2 * s) + ".";
       stage.has_down = true;
+      stage.down_name = prefix + std::to_string(2 * s);
+      stage.down_covers = module_list(stage.down_name + ".", {"0", "1"});
       Conv2dParams p;
       p.cin = cfg_.dims[s - 1];
       p.cout = c;
@@ -191,6 +198,20 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
     for (int i = 0; i < cfg_.depths[s]; ++i) {
       const std::string b = prefix + std::to_string(2 * s + 1) + "." + std::to_string(i) + ".";
       Block blk;
+      blk.name = b.substr(0, b.size() - 1);
+      blk.dw_name = b + "block.0";
+      // LayerNorm (affine folded into pw1), pw1, GELU, pw2, the layer scale (folded into
+      // pw2) and the residual run as one fused tile: the block output stands for them all.
+      blk.covers = module_list(b, {"block", "block.5", "block.6", "stochastic_depth"});
+      blk.perm_name = b + "block.1";
+      blk.ln_name = b + "block.2";
+      blk.pw1_name = b + "block.3";
+      blk.gelu_name = b + "block.4";
+      blk.ln_gamma = load_vec(st, b + "block.2.weight");
+      blk.ln_beta = load_vec(st, b + "block.2.bias");
+      if (precision_ == Precision::Bf16)  // no unfused dump layers in bf16: the tile covers them
+        blk.covers = module_list(b, {"block", "block.1", "block.2", "block.3", "block.4", "block.5", "block.6",
+                                     "stochastic_depth"});
       DwConvParams dp;  // 7x7, stride 1, pad 3
       auto dw = st.f32(b + "block.0.weight");
       auto dwb = st.f32(b + "block.0.bias");
@@ -213,7 +234,7 @@ ConvNeXt::ConvNeXt(const weights::SafeTensors& st, const std::string& prefix,
         blk.pw2 = GemmWeights::pack(w2.data(), c, 4 * c);
         weight_bytes_ += blk.pw1.bytes() + blk.pw2.bytes();
       }
-      count(49 * c + c + 4 * c + c);  // dw, dw bias, b1, b2
+      count(49 * c + c + 4 * c + c + 2 * c);  // dw, dw bias, b1, b2, LayerNorm affine (dumps)
       stage.blocks.push_back(std::move(blk));
     }
     stages_.push_back(std::move(stage));
@@ -237,8 +258,9 @@ void ConvNeXt::plan(int n, int h, int w) {
   conv_scratch_ = static_cast<std::size_t>(stem_chunk_) * s.w * 48;
   std::size_t mlp_scratch = 0;  // per thread for fused stages; whole for unfused
   std::size_t shared_scratch = 0;
-  prof_stem_ = prof_.add("features.0", "conv 4x4/4 + LayerNorm", nchw_str(s),
-                         2.0 * s.count() * 48);
+  // Bytes moved (Profiler): inputs, weights and outputs once each, 4 bytes a float.
+  prof_stem_ = prof_.add(stem_name_, "conv 4x4/4 + LayerNorm", nchw_str(s), 2.0 * s.count() * 48,
+                         4.0 * (3.0 * n * h * w + 51.0 * s.c + s.count()));
   for (std::size_t si = 0; si < stages_.size(); ++si) {
     Stage& st = stages_[si];
     if (st.has_down) {
@@ -252,8 +274,8 @@ void ConvNeXt::plan(int n, int h, int w) {
         shared_scratch = std::max(shared_scratch, dm * patch);
       else
         conv_scratch_ = std::max(conv_scratch_, st.down_chunk * d.w * patch);
-      st.prof_down = prof_.add("features." + std::to_string(2 * si), "LayerNorm + conv 2x2/2",
-                               nchw_str(d), 2.0 * d.count() * 4 * s.c);
+      st.prof_down = prof_.add(st.down_name, "LayerNorm + conv 2x2/2", nchw_str(d), 2.0 * d.count() * 4 * s.c,
+                               4.0 * (s.count() + 4.0 * s.c * d.c + d.c + d.count()));
       s = d;
     }
     stage_shapes_.push_back(s);
@@ -266,9 +288,11 @@ void ConvNeXt::plan(int n, int h, int w) {
       shared_scratch = std::max(shared_scratch, mlp_scratch_floats(m, st.dim));
     for (std::size_t i = 0; i < st.blocks.size(); ++i) {
       Block& b = st.blocks[i];
-      const std::string name = "features." + std::to_string(2 * si + 1) + "." + std::to_string(i);
-      b.prof_dw = prof_.add(name, "dwconv 7x7", nchw_str(s), 2.0 * s.count() * 49);
-      b.prof_mlp = prof_.add(name, "LN+pw1+GELU+pw2+scale+res", nchw_str(s), 2.0 * m * c * 4 * c * 2);
+      b.prof_dw = prof_.add(b.dw_name, "dwconv 7x7", nchw_str(s), 2.0 * s.count() * 49,
+                            4.0 * (2.0 * s.count() + 50.0 * c));
+      // The hidden [rows, 4C] tile stays in cache: input, residual, weights, output.
+      b.prof_mlp = prof_.add(b.name, "LN+pw1+GELU+pw2+scale+res", nchw_str(s), 2.0 * m * c * 4 * c * 2,
+                             4.0 * (3.0 * s.count() + 8.0 * c * c + 5.0 * c));
     }
   }
   out_shape_ = s;
@@ -433,6 +457,10 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
     Profiler::Scope t(&prof_, b.prof_dw);
     dwconv(ConstTensorView(act_a_.data(), s), b.dw, TensorView{act_b_.data(), s});
   }
+  if (dump_) {
+    dump_nhwc(dump_, b.dw_name, ConstTensorView(act_b_.data(), s));
+    if (precision_ == Precision::F32) dump_mlp_layers(b, s);
+  }
   Profiler::Scope t(&prof_, b.prof_mlp);
   const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
   if (const std::size_t tile = fused_mlp_rows(m, c, planned_threads_)) {
@@ -471,6 +499,41 @@ void ConvNeXt::run_block(const Block& b, Shape s) {
   gemm_parallel(rows, sc.hid, 4 * c, b.pw2, act_a_.data(), c, e2);
 }
 
+std::string ConvNeXt::dump_path_of(Precision precision) {
+  if (precision == Precision::Bf16)
+    return "fused (bf16: each ConvNeXt block output covers its whole MLP, block.1 to block.6)";
+  return "fused, plus for the dump each ConvNeXt block's block.1 to block.4 (permute, LayerNorm with its own "
+         "affine, Linear, GELU) computed layer by layer from the depthwise output beside the fused tile, which "
+         "computes the block output (block.5, block.6, layer scale and residual)";
+}
+
+// The MLP's first layers for the dump, as the layer-by-layer path computes them (the
+// same kernels as the fused tile, so block.4 is bitwise the tile's hidden rows).
+void ConvNeXt::dump_mlp_layers(const Block& b, Shape s) {
+  if (!dump_->wants(b.perm_name) && !dump_->wants(b.ln_name) && !dump_->wants(b.pw1_name) &&
+      !dump_->wants(b.gelu_name))
+    return;
+  const int c = s.c;
+  const std::size_t m = static_cast<std::size_t>(s.n) * s.h * s.w;
+  float* ln = dump_->scratch(m * c * 6);  // normalised, affine, hidden
+  float* affine = ln + m * c;
+  float* hid = affine + m * c;
+  const float* dw = act_b_.data();
+  dump_nhwc_as_nhwc(dump_, b.perm_name, ConstTensorView(dw, s));
+  layernorm_parallel(m, c, dw, c, ln, c, nullptr, nullptr, cfg_.eps);
+  layernorm_parallel(m, c, dw, c, affine, c, b.ln_gamma.data(), b.ln_beta.data(), cfg_.eps);
+  dump_nhwc_as_nhwc(dump_, b.ln_name, ConstTensorView(affine, s));
+  const Shape hs{s.n, s.h, s.w, 4 * c};
+  const int rows = static_cast<int>(m);
+  GemmEpilogue e1;
+  e1.bias = b.b1.data();
+  gemm_parallel(rows, ln, c, b.pw1, hid, 4 * c, e1);
+  dump_nhwc_as_nhwc(dump_, b.pw1_name, ConstTensorView(hid, hs));
+  e1.act = Act::Gelu;
+  gemm_parallel(rows, ln, c, b.pw1, hid, 4 * c, e1);
+  dump_nhwc_as_nhwc(dump_, b.gelu_name, ConstTensorView(hid, hs));
+}
+
 ConstTensorView ConvNeXt::forward(const float* input_nchw) {
   if (act_a_.empty()) throw Error("convnext: forward() before plan()");
   if (num_threads() > planned_threads_)
@@ -478,6 +541,7 @@ ConstTensorView ConvNeXt::forward(const float* input_nchw) {
                 " after plan() was made for " + std::to_string(planned_threads_) +
                 "; call plan() again");
   run_stem(input_nchw, stage_shapes_[0]);
+  if (dump_) dump_nhwc(dump_, stem_name_, ConstTensorView(act_a_.data(), stage_shapes_[0]), stem_covers_);
   // act_a_ holds the residual stream, act_b_ the depthwise output; a downsampling
   // layer normalises act_a_ in place, convolves into act_b_ and the two swap roles.
   Shape s = stage_shapes_[0];
@@ -488,9 +552,15 @@ ConstTensorView ConvNeXt::forward(const float* input_nchw) {
       s = stage_shapes_[si];
       run_down(st, prev, s);
       std::swap(act_a_, act_b_);
+      if (dump_) dump_nhwc(dump_, st.down_name, ConstTensorView(act_a_.data(), s), st.down_covers);
     }
-    for (const Block& b : st.blocks) run_block(b, s);
+    for (const Block& b : st.blocks) {
+      run_block(b, s);
+      if (dump_) dump_nhwc(dump_, b.name, ConstTensorView(act_a_.data(), s), b.covers);
+    }
+    if (dump_) dump_nhwc(dump_, st.name, ConstTensorView(act_a_.data(), s));
   }
+  if (dump_) dump_nhwc(dump_, name_, ConstTensorView(act_a_.data(), out_shape_));
   return ConstTensorView(act_a_.data(), out_shape_);
 }
 

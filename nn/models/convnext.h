@@ -14,6 +14,7 @@
 
 #include "nn/buffer.h"
 #include "nn/conv2d.h"
+#include "nn/dump.h"
 #include "nn/dwconv.h"
 #include "nn/gemm.h"
 #include "nn/gemm_bf16.h"
@@ -73,6 +74,18 @@ class ConvNeXt {
   Profiler& profiler() { return prof_; }
   double flops() const;  // multiply-adds x 2 of one forward at the planned size
 
+  // Intermediate tensors of the next forwards go to `sink` (null: off, the default).
+  // Names are torchvision's `features.*` module names (nn/dump.h); the stem, every
+  // downsampling layer, every block's depthwise output `features.S.B.block.0` and
+  // block output `features.S.B`, every stage `features.S` and `features`.
+  // With a sink, each block's MLP also runs layer by layer up to its GELU for the dump
+  // (block.1 .. block.4, channels-last [N, H, W, C] as in PyTorch; f32 only): the
+  // dump.path text below says so.
+  void set_dump(DumpSink* sink) { dump_ = sink; }
+  DumpSink* dump() const { return dump_; }
+  std::string dump_path() const { return dump_path_of(precision_); }
+  static std::string dump_path_of(Precision precision);
+
  private:
   // LayerNorm's gamma/beta are folded into pw1 and the layer scale into pw2 at load
   // (in double): the MLP normalises without an affine step and pw2's epilogue is
@@ -83,6 +96,12 @@ class ConvNeXt {
     GemmWeights pw1, pw2;          // Precision::F32
     GemmWeightsBf16 pw1_bf16, pw2_bf16;  // Precision::Bf16 (the other pair stays empty)
     int prof_dw = -1, prof_mlp = -1;
+    // PyTorch names: "features.S.B", its depthwise conv, and what the fused MLP covers.
+    std::string name, dw_name, covers;
+    // Dumps only: the MLP's first layers as PyTorch runs them (block.1 .. block.4) and
+    // the LayerNorm's own affine (the fused path has it folded into pw1).
+    std::string perm_name, ln_name, pw1_name, gelu_name;
+    AlignedBuffer ln_gamma, ln_beta;
   };
   struct Stage {
     int dim = 0;
@@ -90,6 +109,7 @@ class ConvNeXt {
     Conv2dWeights down;     // LayerNorm gamma/beta folded in
     std::vector<Block> blocks;
     int prof_down = -1;
+    std::string name, down_name, down_covers;  // "features.2s+1", "features.2s"
     int down_chunk = 1;       // output rows per LayerNorm + im2col + GEMM step
     bool down_whole = false;  // small: one im2col, then a GEMM split over columns
   };
@@ -97,6 +117,7 @@ class ConvNeXt {
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
   void run_block(const Block& b, Shape s);
+  void dump_mlp_layers(const Block& b, Shape s);
   // Scratch of one MLP tile (or of all rows on the unfused path): the normalised rows,
   // the hidden rows and, for bf16, both again in bfloat16.
   struct MlpScratch {
@@ -127,6 +148,8 @@ class ConvNeXt {
   int planned_threads_ = 0;
   Profiler prof_;
   int prof_stem_ = -1;
+  DumpSink* dump_ = nullptr;
+  std::string stem_name_, stem_covers_, name_;  // "features.0", its parts, "features"
 };
 
 }  // namespace nn

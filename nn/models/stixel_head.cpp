@@ -155,6 +155,21 @@ StixelHead::StixelHead(const weights::SafeTensors& st, const std::string& prefix
   specs_ = stixel_head_tensor_specs(variant, c, prefix, reduce, norm);
   weights::check_tensors(st, specs_);
 
+  // Dump names (PyTorch's module tree of the head, stixel_head_ref.py).
+  name_dw_ = prefix + "local_mixing.depthwise";
+  name_reduce_ = prefix + reduce;
+  name_norm_ = prefix + norm;
+  if (norm.size() > 2 && norm.compare(norm.size() - 2, 2, ".1") == 0) {  // Sequential(Upsample, LayerNorm2d)
+    name_up_ = prefix + norm.substr(0, norm.size() - 2);
+    name_up0_ = name_up_ + ".0";
+  }
+  name_att_ = prefix + "attention_layer";
+  name_q_ = name_att_ + ".query_layer";
+  name_k_ = name_att_ + ".key_layer";
+  name_v_ = name_att_ + ".value_layer";
+  if (variant == StixelHeadVariant::V4)  // three 1x1 convs + sigmoids + cat in one GEMM
+    output_covers_ = module_list(prefix, {"geometry_head", "depth_head", "probability_head"});
+
   auto f = [&](const std::string& name) { return st.f32(prefix + name); };
   if (variant == StixelHeadVariant::V4) {
     DwConvParams dp;
@@ -247,6 +262,7 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
   if (variant_ == StixelHeadVariant::V4) {
     // x + pointwise(GELU(depthwise_1x5(x)))
     dwconv(pooled, mix_dw_, TensorView{a_.data(), pooled.shape});
+    if (dump_) dump_nhwc(dump_, name_dw_, ConstTensorView(a_.data(), pooled.shape));
     apply_act(Act::Gelu, a_.data(), static_cast<std::size_t>(m) * c);
     GemmEpilogue mix;
     mix.bias = mix_pw_bias_.data();
@@ -256,7 +272,9 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
     GemmEpilogue red;
     red.bias = reduce_bias_.data();
     gemm(m, b_.data(), c, reduce_, c_buf_.data(), reduced_, red);
+    if (dump_) dump_reduced(n, w, columns, false);
     layernorm(m, reduced_, c_buf_.data(), reduced_, c_buf_.data(), reduced_, ln_gamma_.data(), ln_beta_.data(), kLnEps);
+    if (dump_) dump_reduced(n, w, columns, true);
     GemmEpilogue heads;
     heads.bias = heads_bias_.data();
     heads.act = Act::Sigmoid;
@@ -269,7 +287,13 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
       GemmEpilogue qkv;
       qkv.bias = qkv_bias_.data();
       gemm(m, features, c, qkv_, a_.data(), 3 * c, qkv);
+      if (dump_) {
+        dump_columns(name_q_, a_.data(), n, w, 3 * c, 0, c, false);
+        dump_columns(name_k_, a_.data(), n, w, 3 * c, c, c, false);
+        dump_columns(name_v_, a_.data(), n, w, 3 * c, 2 * c, c, false);
+      }
       attention(a_.data(), n, w, b_.data());
+      if (dump_) dump_columns(name_att_, b_.data(), n, w, 2 * c, 0, c, true);
       // [attention output, F] along channels
       for (int r = 0; r < m; ++r)
         std::memcpy(b_.data() + static_cast<std::size_t>(r) * 2 * c + c, features + static_cast<std::size_t>(r) * c,
@@ -280,7 +304,9 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
     GemmEpilogue red;
     red.bias = reduce_bias_.data();
     gemm(m, reduce_in, k, reduce_, c_buf_.data(), reduced_, red);
+    if (dump_) dump_reduced(n, w, columns, false);
     layernorm(m, reduced_, c_buf_.data(), reduced_, c_buf_.data(), reduced_, ln_gamma_.data(), ln_beta_.data(), kLnEps);
+    if (dump_) dump_reduced(n, w, columns, true);
     apply_act(Act::Sigmoid, c_buf_.data(), static_cast<std::size_t>(m) * reduced_);
   }
   // [m, A*64] -> [n, A, 64, columns], column u taking feature column floor(u * W' / U).
@@ -291,6 +317,47 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
       for (int u = 0; u < columns; ++u)
         dst[u] = result[(static_cast<std::size_t>(b) * w + nearest_source(u, w, columns)) * channels + ch];
     }
+}
+
+// The reduced features before (the 1x1 conv's output, then Upsample's) or after the
+// LayerNorm (LayerNorm2d's and the `up` Sequential's output). LayerNorm works per column,
+// so normalising W' columns and then copying them equals PyTorch's upsample-then-norm.
+void StixelHead::dump_reduced(int n, int w, int columns, bool normalised) const {
+  const float* rows = c_buf_.data();
+  if (!normalised) {
+    dump_nhwc(dump_, name_reduce_, ConstTensorView(rows, Shape{n, 1, w, reduced_}));
+    if (!name_up0_.empty()) dump_upsampled(name_up0_, rows, n, w, reduced_, columns);
+    return;
+  }
+  dump_upsampled(name_norm_, rows, n, w, reduced_, columns);
+  if (!name_up_.empty()) dump_upsampled(name_up_, rows, n, w, reduced_, columns);
+}
+
+void StixelHead::dump_upsampled(const std::string& name, const float* rows, int n, int w, int k, int columns) const {
+  if (!dump_->wants(name)) return;
+  float* out = dump_->scratch(static_cast<std::size_t>(n) * k * columns);
+  for (int b = 0; b < n; ++b)
+    for (int ch = 0; ch < k; ++ch)
+      for (int u = 0; u < columns; ++u)
+        out[(static_cast<std::size_t>(b) * k + ch) * columns + u] =
+            rows[(static_cast<std::size_t>(b) * w + nearest_source(u, w, columns)) * k + ch];
+  dump_->tensor(name, {n, k, 1, columns}, out, "");
+}
+
+void StixelHead::dump_columns(const std::string& name, const float* rows, int n, int w, int ld, int c0, int k,
+                              bool as_nchw) const {
+  if (!dump_->wants(name)) return;
+  float* out = dump_->scratch(static_cast<std::size_t>(n) * w * k);
+  for (int b = 0; b < n; ++b)
+    for (int x = 0; x < w; ++x)
+      for (int ch = 0; ch < k; ++ch) {
+        const float v = rows[(static_cast<std::size_t>(b) * w + x) * ld + c0 + ch];
+        out[as_nchw ? (static_cast<std::size_t>(b) * k + ch) * w + x : (static_cast<std::size_t>(b) * w + x) * k + ch] = v;
+      }
+  if (as_nchw)
+    dump_->tensor(name, {n, k, 1, w}, out, "");
+  else
+    dump_->tensor(name, {n, w, k}, out, "");
 }
 
 }  // namespace nn

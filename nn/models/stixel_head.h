@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "nn/buffer.h"
+#include "nn/dump.h"
 #include "nn/dwconv.h"
 #include "nn/gemm.h"
 #include "nn/tensor.h"
@@ -63,7 +64,24 @@ class StixelHead {
   // after the sigmoid. Allocates nothing.
   void forward(const ConstTensorView& pooled, int columns, float* out);
 
+  // Intermediate tensors under the PyTorch head's module names (prefix "classifier."):
+  // V4 local_mixing.depthwise, shared_reduce, up.0, up.1, up; V1/V3 the attention's
+  // query/key/value layers and attention_layer; channel_reduce (V0: its own name),
+  // up.0, up.1, up. Null: off. The head's output itself is dumped by the model.
+  void set_dump(DumpSink* sink) { dump_ = sink; }
+  // What the head's output tensor stands for where the engine fused modules ("" if none).
+  const std::string& output_covers() const { return output_covers_; }
+
  private:
+  // rows [n * w, k] (NHWC, one feature row) as PyTorch's [n, k, 1, columns] after the
+  // nearest upsampling to `columns`.
+  void dump_reduced(int n, int w, int columns, bool normalised) const;
+  void dump_upsampled(const std::string& name, const float* rows, int n, int w, int k, int columns) const;
+  // Channels [c0, c0 + k) of rows with stride ld, as [n, w, k] (a Linear's output) or,
+  // when as_nchw, as [n, k, 1, w].
+  void dump_columns(const std::string& name, const float* rows, int n, int w, int ld, int c0, int k,
+                    bool as_nchw) const;
+
   void attention(const float* x, int n, int w, float* att) const;
 
   StixelHeadVariant variant_;
@@ -82,6 +100,9 @@ class StixelHead {
   // scratch
   AlignedBuffer a_, b_, c_buf_;
   int planned_n_ = 0, planned_w_ = 0;
+  DumpSink* dump_ = nullptr;
+  std::string name_dw_, name_reduce_, name_up0_, name_norm_, name_up_, name_att_, name_q_, name_k_, name_v_;
+  std::string output_covers_;
 };
 
 }  // namespace nn

@@ -25,6 +25,12 @@ std::vector<std::string> StixelNExT::used_tensors() const {
   return names;
 }
 
+void StixelNExT::set_dump(DumpSink* sink) {
+  dump_ = sink;
+  backbone_.set_dump(sink);
+  head_.set_dump(sink);
+}
+
 void StixelNExT::plan(int n, int h, int w, int columns) {
   if (columns < 1 || columns > 100000) throw Error("stixelnext: the column count must be between 1 and 100000");
   backbone_.plan(n, h, w);
@@ -35,9 +41,9 @@ void StixelNExT::plan(int n, int h, int w, int columns) {
   columns_ = columns;
   prediction_.resize(static_cast<std::size_t>(n) * head_.attributes() * StixelHead::kCandidates * columns);
   Profiler& prof = backbone_.profiler();
-  prof_pool_ = prof.add("avgpool", "mean over rows", "[" + std::to_string(n) + ", " + std::to_string(f.c) + ", 1, " +
+  prof_pool_ = prof.add(pool_name_, "mean over rows", "[" + std::to_string(n) + ", " + std::to_string(f.c) + ", 1, " +
                                                           std::to_string(f.w) + "]", 0);
-  prof_head_ = prof.add("classifier", std::string("stixel head ") + stixel_head_name(head_.variant()),
+  prof_head_ = prof.add(head_name_, std::string("stixel head ") + stixel_head_name(head_.variant()),
                         "[" + std::to_string(n) + ", " + std::to_string(head_.attributes()) + ", 64, " +
                             std::to_string(columns) + "]",
                         0);
@@ -55,8 +61,12 @@ const float* StixelNExT::forward(const float* input_nchw) {
     Profiler::Scope t(&backbone_.profiler(), prof_pool_);
     mean_over_rows(f, TensorView{pooled_.data(), p});
   }
-  Profiler::Scope t(&backbone_.profiler(), prof_head_);
-  head_.forward(ConstTensorView(pooled_.data(), p), columns_, prediction_.data());
+  if (dump_) dump_nhwc(dump_, pool_name_, ConstTensorView(pooled_.data(), p));
+  {
+    Profiler::Scope t(&backbone_.profiler(), prof_head_);
+    head_.forward(ConstTensorView(pooled_.data(), p), columns_, prediction_.data());
+  }
+  if (dump_) dump_flat(dump_, head_name_, prediction_shape(), prediction_.data(), head_.output_covers());
   return prediction_.data();
 }
 

@@ -33,6 +33,9 @@ class StixelNExT {
   // Returns the prediction (valid until the next forward). Allocates nothing.
   const float* forward(const float* input_nchw);
   Profiler& profiler() { return backbone_.profiler(); }
+  // Intermediate tensors under the authors' module names: the backbone's `features.*`,
+  // `avgpool`, the head's `classifier.*` and `classifier` (the prediction). Null: off.
+  void set_dump(DumpSink* sink);
 
  private:
   ConvNeXt backbone_;
@@ -40,6 +43,8 @@ class StixelNExT {
   AlignedBuffer pooled_, prediction_;
   int columns_ = 0;
   int prof_pool_ = -1, prof_head_ = -1;
+  DumpSink* dump_ = nullptr;
+  std::string pool_name_ = "avgpool", head_name_ = "classifier";
 };
 
 }  // namespace nn

@@ -233,3 +233,79 @@ TEST(NoAllocation, CApiDetectRun) {
 }
 
 }  // namespace
+
+// Dumps (nn/dump.h): with the sink set the forward may allocate (names, layout
+// conversion); switched off again, it allocates nothing, and the sink sees nothing.
+namespace {
+
+struct CountingSink : nn::DumpSink {
+  long tensors = 0;
+  bool wants(const std::string&) const override { return true; }
+  void tensor(const std::string&, const std::vector<std::int64_t>&, const float*, const std::string&) override {
+    ++tensors;
+  }
+};
+
+TEST(NoAllocation, DumpSwitchedOffConvNeXtAndStixelNExT) {
+  auto specs = nn::convnext_tensor_specs(small(), "features.");
+  for (auto& s : nn::stixel_head_tensor_specs(nn::StixelHeadVariant::V4, 28, "classifier.")) specs.push_back(s);
+  auto st = weights::SafeTensors::from_bytes(nn::synthetic_weights(specs, 2).bytes(), "synthetic");
+  nn::StixelNExT model(st);
+  model.plan(1, 64, 256, 32);
+  std::vector<float> x(3 * 64 * 256, 100.f);
+  CountingSink sink;
+  model.set_dump(&sink);
+  model.forward(x.data());
+  ASSERT_GT(sink.tensors, 10) << "the dump was on";
+  model.set_dump(nullptr);
+  const long seen = sink.tensors;
+  EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); }));
+  EXPECT_EQ(seen, sink.tensors);
+}
+
+TEST(NoAllocation, DumpSwitchedOffFasterRcnn) {
+  namespace det = nn::detection;
+  const auto v = det::FasterRcnnVariant::ResNet50Fpn;
+  auto st = weights::SafeTensors::from_bytes(nn::synthetic_weights(det::faster_rcnn_tensor_specs(v, 3), 5).bytes(),
+                                             "synthetic");
+  det::FasterRcnnConfig cfg = det::faster_rcnn_defaults(v);
+  cfg.transform.min_size = 160, cfg.transform.max_size = 256;
+  det::FasterRcnn model(st, v, cfg);
+  model.plan(120, 200);
+  std::vector<float> x(3 * 120 * 200, 0.25f);
+  CountingSink sink;
+  model.set_dump(&sink);
+  model.forward(x.data());
+  ASSERT_GT(sink.tensors, 50) << "the dump was on";
+  model.set_dump(nullptr);
+  const long seen = sink.tensors;
+  EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); }));
+  EXPECT_EQ(seen, sink.tensors);
+}
+
+void count_tensor(const char*, const std::int64_t*, int, const float*, const char*, void* user) {
+  ++*static_cast<long*>(user);
+}
+
+TEST(NoAllocation, CApiDumpSwitchedOff) {
+  const auto bytes = nn::synthetic_weights(nn::convnext_tensor_specs(small(), "features."), 1).bytes();
+  ApiModel m;
+  const roadnn_model_params mp = roadnn_model_default_params(ROADNN_MODEL_CONVNEXT);
+  ASSERT_EQ(ROADNN_OK, roadnn_model_load_memory(bytes.data(), bytes.size(), &mp, &m.model)) << roadnn_last_error();
+  roadnn_session_params sp = roadnn_session_default_params();
+  sp.height = 96, sp.width = 128;
+  ASSERT_EQ(ROADNN_OK, roadnn_session_create(m.model, &sp, &m.session)) << roadnn_last_error();
+  std::int64_t shape[4];
+  ASSERT_EQ(ROADNN_OK, roadnn_convnext_output_shape(m.session, shape));
+  std::vector<float> x(3 * 96 * 128, 0.5f), y(shape[0] * shape[1] * shape[2] * shape[3]);
+  long tensors = 0;
+  ASSERT_EQ(ROADNN_OK, roadnn_session_set_dump(m.session, count_tensor, &tensors));
+  ASSERT_EQ(ROADNN_OK, roadnn_convnext_run(m.session, x.data(), x.size(), y.data(), y.size()));
+  ASSERT_GT(tensors, 5);
+  ASSERT_EQ(ROADNN_OK, roadnn_session_set_dump(m.session, nullptr, nullptr));
+  const long seen = tensors;
+  EXPECT_EQ(0, allocations_during([&] { roadnn_convnext_run(m.session, x.data(), x.size(), y.data(), y.size()); }));
+  EXPECT_EQ(seen, tensors);
+}
+
+}  // namespace

@@ -4,6 +4,7 @@
 #include <memory>
 #include <vector>
 
+#include "nn/dump.h"
 #include "nn/profiler.h"
 #include "nn/tensor.h"
 
@@ -21,6 +22,9 @@ class Backbone {
   virtual void plan(int h, int w, Profiler* layers) = 0;
   // in: {1, h, w, 3}. Views stay valid until the next forward.
   virtual const std::vector<ConstTensorView>& forward(const ConstTensorView& in) = 0;
+  // Intermediate tensors of the body under torchvision's names (nn/dump.h); null: off.
+  // A body without inner dumps ignores it (the detector dumps its outputs).
+  virtual void set_dump(DumpSink* sink) { (void)sink; }
 };
 
 // A Backbone owner that copies by clone(), so that the detector stays copyable.

@@ -93,7 +93,20 @@ FasterRcnn::FasterRcnn(const weights::SafeTensors& st, FasterRcnnVariant v, cons
       rpn_(st, kRpn, cfg.rpn),
       roi_heads_(st, kRoi, cfg.roi_heads) {}
 
+void FasterRcnn::set_dump(DumpSink* sink) {
+  dump_ = sink;
+  attach_dump(sink);
+}
+
+void FasterRcnn::attach_dump(DumpSink* sink) {
+  backbone_->set_dump(sink);
+  fpn_.set_dump(sink);
+  rpn_.set_dump(sink);
+  roi_heads_.set_dump(sink);
+}
+
 void FasterRcnn::plan(int h, int w) {
+  attach_dump(nullptr);  // the dry run below is no forward of the user's input
   sizes_ = transform_sizes(h, w, cfg_.transform);
   input_.resize({1, sizes_.padded_h, sizes_.padded_w, 3});
   normalised_.resize({1, h, w, 3});
@@ -120,6 +133,17 @@ void FasterRcnn::plan(int h, int w) {
   detections_.scores.reserve(kept);
   detections_.labels.reserve(kept);
   planned_h_ = h, planned_w_ = w;
+  // Output names: IntermediateLayerGetter's dict '0'.., the FPN's '0'.., 'pool'.
+  transform_name_ = "transform[0]";
+  proposals_name_ = "rpn[0][0]";
+  body_names_.clear(), fpn_names_.clear(), backbone_names_.clear();
+  for (std::size_t i = 0; i < feats.size(); ++i) body_names_.push_back("backbone.body[" + std::to_string(i) + "]");
+  for (std::size_t i = 0; i < pyramid.size(); ++i) {
+    const std::string key = i + 1 < pyramid.size() ? std::to_string(i) : "pool";
+    fpn_names_.push_back("backbone.fpn[" + key + "]");
+    backbone_names_.push_back("backbone[" + key + "]");
+  }
+  attach_dump(dump_);
   profiler_.clear();
   prof_transform_ = profiler_.add("transform", "normalise+resize+pad", "", 0);
   prof_backbone_ = profiler_.add("backbone.body", "backbone", "", 0);
@@ -134,21 +158,37 @@ const Detections& FasterRcnn::forward(const float* image) {
     Profiler::Scope t(&profiler_, prof_transform_);
     transform_image(image, sizes_, cfg_.transform, normalised_.data.data(), resized_.data.data(), input_.view());
   }
+  if (dump_) dump_nhwc(dump_, transform_name_, input_.cview());
   const std::vector<ConstTensorView>* feats;
   const std::vector<ConstTensorView>* pyramid;
   {
     Profiler::Scope t(&profiler_, prof_backbone_);
     feats = &backbone_->forward(input_.cview());
   }
+  if (dump_)
+    for (std::size_t i = 0; i < feats->size(); ++i) dump_nhwc(dump_, body_names_[i], (*feats)[i]);
   {
     Profiler::Scope t(&profiler_, prof_fpn_);
     pyramid = &fpn_.forward(*feats);
+  }
+  if (dump_) {
+    for (std::size_t i = 0; i < pyramid->size(); ++i) dump_nhwc(dump_, fpn_names_[i], (*pyramid)[i]);
+    for (std::size_t i = 0; i < pyramid->size(); ++i) dump_nhwc(dump_, backbone_names_[i], (*pyramid)[i]);
   }
   {
     Profiler::Scope t(&profiler_, prof_rpn_);
     const Proposals& p = rpn_.forward(*pyramid, sizes_);
     proposals_.boxes.assign(p.boxes.begin(), p.boxes.end());
     proposals_.scores.assign(p.scores.begin(), p.scores.end());
+  }
+  if (dump_ && dump_->wants(proposals_name_)) {
+    const int n = static_cast<int>(proposals_.boxes.size());
+    float* flat = dump_->scratch(4 * static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      const Box& b = proposals_.boxes[i];
+      flat[4 * i] = b.x1, flat[4 * i + 1] = b.y1, flat[4 * i + 2] = b.x2, flat[4 * i + 3] = b.y2;
+    }
+    dump_->tensor(proposals_name_, {n, 4}, flat, "");
   }
   {
     Profiler::Scope t(&profiler_, prof_roi_);

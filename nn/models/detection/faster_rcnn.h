@@ -62,7 +62,18 @@ class FasterRcnn {
   Profiler& profiler() { return profiler_; }
   Profiler& layer_profiler() { return layer_profiler_; }
 
+  // Intermediate tensors of the next forwards under torchvision's module names
+  // (nn/dump.h): transform[0], the body's layers (ResNet-50) and outputs
+  // backbone.body[i], the FPN's blocks and outputs backbone.fpn[k] / backbone[k], the
+  // RPN head per level, rpn[0][0] (proposals), the RoI heads. Null: off. plan()'s
+  // shape-finding dry run never dumps.
+  void set_dump(DumpSink* sink);
+
  private:
+  void attach_dump(DumpSink* sink);
+  DumpSink* dump_ = nullptr;
+  std::string transform_name_, proposals_name_;
+  std::vector<std::string> body_names_, fpn_names_, backbone_names_;
   FasterRcnnConfig cfg_;
   std::vector<weights::TensorSpec> specs_;
   BackboneHolder backbone_;

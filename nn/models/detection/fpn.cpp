@@ -38,6 +38,8 @@ Fpn::Fpn(const weights::SafeTensors& st, const std::string& prefix, const std::v
   for (std::size_t i = 0; i < in.size(); ++i) {
     inner_.push_back(load_conv(st, inner_name(prefix, i), params(in[i], 1)));
     layer_.push_back(load_conv(st, layer_name(prefix, i), params(kChannels, 3)));
+    inner_names_.push_back(inner_name(prefix, i));
+    layer_names_.push_back(layer_name(prefix, i));
   }
 }
 
@@ -61,16 +63,29 @@ void Fpn::plan(const std::vector<Shape>& inputs) {
   result_.reserve(inputs.size() + 1);
 }
 
+// inner_name()/layer_name() end in "."; Conv2dNormActivation wraps each conv as ".0".
+void Fpn::dump_level(std::size_t i, bool lateral_is_module) const {
+  auto strip = [](const std::string& n) { return n.substr(0, n.size() - 1); };
+  if (lateral_is_module) {
+    const std::string inner = strip(inner_names_[i]);
+    dump_nhwc(dump_, inner.substr(0, inner.size() - 2), inner_out_[i].cview(), inner);
+  }
+  const std::string layer = strip(layer_names_[i]);
+  dump_nhwc(dump_, layer.substr(0, layer.size() - 2), out_[i].cview(), layer);
+}
+
 const std::vector<ConstTensorView>& Fpn::forward(const std::vector<ConstTensorView>& x) {
   const std::size_t n = x.size();
   conv2d(x[n - 1], inner_[n - 1], inner_out_[n - 1].view(), scratch_.get());
   conv2d(inner_out_[n - 1].cview(), layer_[n - 1], out_[n - 1].view(), scratch_.get());
+  if (dump_) dump_level(n - 1, true);
   for (std::size_t i = n - 1; i-- > 0;) {
     // last_inner = lateral + interpolate(last_inner, size=lateral size, mode="nearest");
     // the epilogue adds the residual after the bias, i.e. (conv + bias) + top_down.
     upsample_nearest(inner_out_[i + 1].cview(), upsampled_[i].view());
     conv2d(x[i], inner_[i], inner_out_[i].view(), scratch_.get(), Act::None, upsampled_[i].data.data());
     conv2d(inner_out_[i].cview(), layer_[i], out_[i].view(), scratch_.get());
+    if (dump_) dump_level(i, false);
   }
   const Shape last = out_[n - 1].shape;
   for (int y = 0; y < pool_.shape.h; ++y)

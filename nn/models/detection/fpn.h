@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "nn/dump.h"
 #include "nn/models/detection/layers.h"
 
 namespace nn::detection {
@@ -19,8 +20,15 @@ class Fpn {
   void plan(const std::vector<Shape>& inputs);
   // Views stay valid until the next forward.
   const std::vector<ConstTensorView>& forward(const std::vector<ConstTensorView>& inputs);
+  // Dumps (nn/dump.h): layer_blocks.i (= the output level i), the top lateral
+  // inner_blocks.{n-1} (the others have the top-down sum fused in, no PyTorch module
+  // returns them). The detector dumps the output dict. Null: off.
+  void set_dump(DumpSink* sink) { dump_ = sink; }
 
  private:
+  void dump_level(std::size_t i, bool lateral_is_module) const;
+  DumpSink* dump_ = nullptr;
+  std::vector<std::string> inner_names_, layer_names_;
   std::vector<Conv2dWeights> inner_, layer_;
   std::vector<Activation> inner_out_, upsampled_, out_;
   Activation pool_;

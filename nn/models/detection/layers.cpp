@@ -65,7 +65,11 @@ int add_conv_row(Profiler* prof, const std::string& layer, const Conv2dWeights& 
   std::string op = "conv " + std::to_string(p.kh) + "x" + std::to_string(p.kw);
   if (p.stride_h > 1) op += "/" + std::to_string(p.stride_h);
   if (w.is_winograd()) op += " winograd";
-  return prof->add(layer, op, nchw_str(out), 2.0 * out.count() * p.cin * p.kh * p.kw);
+  // Bytes moved: the input (about out * stride^2 pixels), weights and output once each.
+  const double in = static_cast<double>(out.n) * out.h * p.stride_h * out.w * p.stride_w * p.cin;
+  const double weights = static_cast<double>(p.cout) * p.cin * p.kh * p.kw / std::max(p.groups, 1) + p.cout;
+  return prof->add(layer, op, nchw_str(out), 2.0 * out.count() * p.cin * p.kh * p.kw,
+                   4.0 * (in + weights + static_cast<double>(out.count())));
 }
 
 void conv2d_timed(Profiler* prof, int row, const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out,

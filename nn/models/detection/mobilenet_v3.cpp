@@ -75,7 +75,8 @@ std::vector<weights::TensorSpec> MobileNetV3Backbone::tensor_specs(const std::st
   return s;
 }
 
-MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps) {
+MobileNetV3Backbone::MobileNetV3Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps)
+    : prefix_(prefix) {
   stem_ = load_conv_bn(st, prefix + "0.0.weight", prefix + "0.1.", conv_params(3, kStem, 3, 2), eps);
   for (int i = 1; i <= 15; ++i) {
     const BlockSpec& s = kLarge[i - 1];
@@ -121,24 +122,31 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
   auto grow = [](std::size_t& m, const Shape& s) { m = std::max(m, s.count()); };
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   grow(pp_max, s);
-  row_stem_ = add_conv_row(prof, "0", stem_, s);
+  stem_name_ = prefix_ + "0";
+  last_name_ = prefix_ + "16";
+  row_stem_ = add_conv_row(prof, stem_name_, stem_, s);
   scratch_ = ConvScratch();
   scratch_.require(stem_, s.w);
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
-    const std::string name = std::to_string(i + 1) + ".";
+    // InvertedResidual.block: [expand], depthwise, [squeeze-excitation], project.
+    int part = 0;
+    b.name = prefix_ + std::to_string(i + 1);
+    auto next = [&] { return b.name + ".block." + std::to_string(part++); };
     if (b.has_expand) {
       scratch_.require(b.expand, s.w);
       b.a = {1, s.h, s.w, b.exp};
       grow(a_max, b.a);
-      b.row_expand = add_conv_row(prof, name + "expand", b.expand, b.a);
+      b.expand_name = next();
+      b.row_expand = add_conv_row(prof, b.expand_name, b.expand, b.a);
     }
     s = dwconv_output_shape({1, s.h, s.w, b.exp}, b.dw.params());
     b.b = s;
     grow(b_max, s);
+    const std::string dw_name = b.dw_name = next();
     if (prof) {
       const DwConvParams& d = b.dw.params();
-      b.row_dw = prof->add(name + "dw", "dwconv " + std::to_string(d.kh) + "x" + std::to_string(d.kw) + "/" +
+      b.row_dw = prof->add(dw_name, "dwconv " + std::to_string(d.kh) + "x" + std::to_string(d.kw) + "/" +
                                             std::to_string(d.stride_h),
                            nchw_str(s), 2.0 * s.count() * d.kh * d.kw);
     }
@@ -146,12 +154,14 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
       b.pooled.resize({1, 1, 1, b.exp});
       b.squeezed.resize({1, 1, 1, b.se});
       b.excited.resize({1, 1, 1, b.exp});
-      if (prof) b.row_se = prof->add(name + "se", "squeeze-excitation", nchw_str(s), 0);
+      const std::string se_name = b.se_name = next();
+      if (prof) b.row_se = prof->add(se_name, "squeeze-excitation", nchw_str(s), 0);
     }
     scratch_.require(b.project, s.w);
     s.c = b.cout;
     b.out = s;
-    b.row_project = add_conv_row(prof, name + "project", b.project, s);
+    b.project_name = next();
+    b.row_project = add_conv_row(prof, b.project_name, b.project, s);
     if (i == kC13Block) c13_out_.resize(s);
     else grow(pp_max, s);
   }
@@ -161,7 +171,7 @@ void MobileNetV3Backbone::plan(int h, int w, Profiler* prof) {
   for (auto& buf : pingpong_) buf.resize(pp_max);
   scratch_.require(last_, s.w);
   last_out_.resize({1, s.h, s.w, kLast});
-  row_last_ = add_conv_row(prof, "16", last_, last_out_.shape);
+  row_last_ = add_conv_row(prof, last_name_, last_, last_out_.shape);
   scratch_.allocate();
   outs_.reserve(2);
 }
@@ -171,6 +181,7 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const T
   if (b.has_expand) {
     const TensorView a{tmp_a_.data(), b.a};
     conv2d_timed(prof_, b.row_expand, x, b.expand, a, scratch_.get(), b.act);
+    if (dump_) dump_nhwc(dump_, b.expand_name, a);
     x = a;
   }
   const TensorView mid{tmp_b_.data(), b.b};
@@ -178,6 +189,7 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const T
     Profiler::Scope t(prof_, b.row_dw);
     dwconv(x, b.dw, mid);
   }
+  if (dump_) dump_nhwc(dump_, b.dw_name, mid);
   if (b.se) {
     Profiler::Scope t(prof_, b.row_se);
     // Squeeze-excitation: hardsigmoid(fc2(relu(fc1(mean)))) scales every pixel.
@@ -190,12 +202,23 @@ void MobileNetV3Backbone::run_block(Block& b, const ConstTensorView& in, const T
     gemm(1, b.squeezed.data.data(), b.se, b.fc2, b.excited.data.data(), b.exp, e2);
     scale_channels(mid, b.excited.data.data());
   }
+  if (dump_ && b.se) dump_nhwc(dump_, b.se_name, mid);
   conv2d_timed(prof_, b.row_project, mid, b.project, out, scratch_.get(), Act::None, b.residual ? in.data : nullptr);
+  if (dump_) {
+    // With a residual the add is fused into the projection: its own output does not exist.
+    const std::string sequential = b.name + ".block";  // the block's Sequential: the projection
+    if (!b.residual) {
+      dump_nhwc(dump_, b.project_name, out);
+      dump_nhwc(dump_, sequential, out);
+    }
+    dump_nhwc(dump_, b.name, out, b.residual ? b.project_name + "," + sequential : std::string());
+  }
 }
 
 const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTensorView& in) {
   const TensorView stem_out{pingpong_[0].data(), stem_shape_};
   conv2d_timed(prof_, row_stem_, in, stem_, stem_out, scratch_.get(), Act::HardSwish);
+  if (dump_) dump_nhwc(dump_, stem_name_, stem_out);
   ConstTensorView x = stem_out;
   int next = 1;  // the ping-pong buffer the next block writes (never x's)
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
@@ -205,6 +228,7 @@ const std::vector<ConstTensorView>& MobileNetV3Backbone::forward(const ConstTens
     if (i != kC13Block) next ^= 1;
   }
   conv2d_timed(prof_, row_last_, x, last_, last_out_.view(), scratch_.get(), Act::HardSwish);
+  if (dump_) dump_nhwc(dump_, last_name_, last_out_.cview());
   outs_.assign({c13_out_.cview(), last_out_.cview()});
   return outs_;
 }

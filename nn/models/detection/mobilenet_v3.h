@@ -24,8 +24,13 @@ class MobileNetV3Backbone : public Backbone {
   void plan(int h, int w, Profiler* layers) override;
   // in: {1, h, w, 3}. Returns views of the two outputs (valid until the next call).
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
+  // backbone.body.0 (stem), per InvertedResidual backbone.body.i and its block.0
+  // (expand), block.1 (depthwise), block.2 (squeeze-excitation) and, without a
+  // residual, block.3 (project); backbone.body.16.
+  void set_dump(DumpSink* sink) override { dump_ = sink; }
 
  private:
+  std::string prefix_;  // "backbone.body."; profile rows use torchvision's module names
   struct Block {
     int cin = 0, exp = 0, cout = 0, k = 3, stride = 1, se = 0;
     Act act = Act::Relu;
@@ -37,6 +42,8 @@ class MobileNetV3Backbone : public Backbone {
     Shape a, b, out;  // planned outputs of expand, depthwise, project
     Activation pooled, squeezed, excited;
     int row_expand = -1, row_dw = -1, row_se = -1, row_project = -1;  // profiler rows
+    // torchvision's names: the InvertedResidual "backbone.body.i" and its block parts.
+    std::string name, expand_name, dw_name, se_name, project_name;
   };
   void run_block(Block& blk, const ConstTensorView& in, const TensorView& out);
 
@@ -52,6 +59,8 @@ class MobileNetV3Backbone : public Backbone {
   std::vector<ConstTensorView> outs_;
   Profiler* prof_ = nullptr;
   int row_stem_ = -1, row_last_ = -1;
+  DumpSink* dump_ = nullptr;
+  std::string stem_name_, last_name_;
 };
 
 }  // namespace nn::detection

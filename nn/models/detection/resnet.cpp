@@ -48,10 +48,23 @@ std::vector<weights::TensorSpec> ResNet50Backbone::tensor_specs(const std::strin
 
 ResNet50Backbone::ResNet50Backbone(const weights::SafeTensors& st, const std::string& prefix, float eps) {
   stem_ = load_conv_bn(st, prefix + "conv1.weight", prefix + "bn1.", conv(3, 64, 7, 2), eps);
+  stem_name_ = prefix + "relu";
+  stem_covers_ = module_list(prefix, {"conv1", "bn1"});
+  pool_name_ = prefix + "maxpool";
+  for (int l = 0; l < 4; ++l) layer_names_.push_back(prefix + "layer" + std::to_string(l + 1));
   layers_.resize(4);
   for_each_block([&](int l, int i, int cin, int w, int stride) {
     const std::string b = block_name(prefix, l, i);
     Bottleneck blk;
+    blk.name = b.substr(0, b.size() - 1);
+    blk.relu1 = b + "relu";
+    blk.relu2 = b + "relu#1";
+    blk.relu3 = b + "relu#2";
+    blk.down = b + "downsample";
+    blk.covers1 = module_list(b, {"conv1", "bn1"});
+    blk.covers2 = module_list(b, {"conv2", "bn2"});
+    blk.covers3 = module_list(b, {"conv3", "bn3"});  // + the residual add
+    blk.covers_down = module_list(b, {"downsample.0", "downsample.1"});
     blk.conv1 = load_conv_bn(st, b + "conv1.weight", b + "bn1.", conv(cin, w, 1, 1), eps);
     blk.conv2 = load_conv_bn(st, b + "conv2.weight", b + "bn2.", conv(w, w, 3, stride), eps);
     blk.conv3 = load_conv_bn(st, b + "conv3.weight", b + "bn3.", conv(w, 4 * w, 1, 1), eps);
@@ -70,10 +83,10 @@ void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   scratch_.require(stem_, s.w);
   grow(pp_max, s);
-  row_stem_ = add_conv_row(prof, "conv1", stem_, s);
+  row_stem_ = add_conv_row(prof, stem_name_, stem_, s);
   s = max_pool2d_output_shape(s, MaxPoolParams{});
   pooled_.resize(s);
-  if (prof) row_pool_ = prof->add("maxpool", "max pool 3x3/2", nchw_str(s), 0);
+  if (prof) row_pool_ = prof->add(pool_name_, "max pool 3x3/2", nchw_str(s), 0);
   layer_out_.resize(layers_.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     for (std::size_t i = 0; i < layers_[l].size(); ++i) {
@@ -84,11 +97,11 @@ void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
       grow(a_max, b.a);
       grow(b_max, b.b);
       if (b.has_downsample) grow(id_max, conv2d_output_shape(s, b.downsample.params()));
-      const std::string name = "layer" + std::to_string(l + 1) + "." + std::to_string(i) + ".";
-      b.row1 = add_conv_row(prof, name + "conv1", b.conv1, b.a);
-      b.row2 = add_conv_row(prof, name + "conv2", b.conv2, b.b);
-      if (b.has_downsample) b.row_down = add_conv_row(prof, name + "downsample", b.downsample, b.out);
-      b.row3 = add_conv_row(prof, name + "conv3", b.conv3, b.out);
+      // Rows under the dump's names: each fused conv's output tensor.
+      b.row1 = add_conv_row(prof, b.relu1, b.conv1, b.a);
+      b.row2 = add_conv_row(prof, b.relu2, b.conv2, b.b);
+      if (b.has_downsample) b.row_down = add_conv_row(prof, b.down, b.downsample, b.out);
+      b.row3 = add_conv_row(prof, b.name, b.conv3, b.out);
       if (i + 1 < layers_[l].size()) grow(pp_max, b.out);
       scratch_.require(b.conv1, b.a.w);
       scratch_.require(b.conv2, b.b.w);
@@ -113,6 +126,10 @@ const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorV
     Profiler::Scope t(prof_, row_pool_);
     max_pool2d(ConstTensorView(stem_out.data, stem_out.shape), MaxPoolParams{}, pooled_.view());
   }
+  if (dump_) {
+    dump_nhwc(dump_, stem_name_, stem_out, stem_covers_);
+    dump_nhwc(dump_, pool_name_, pooled_.cview());
+  }
   ConstTensorView x = pooled_.cview();
   int next = 0;  // the ping-pong buffer the next inner block writes (never x's)
   outs_.clear();
@@ -121,19 +138,27 @@ const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorV
       Bottleneck& b = layers_[l][i];
       const TensorView a{tmp_a_.data(), b.a}, mid{tmp_b_.data(), b.b};
       conv2d_timed(prof_, b.row1, x, b.conv1, a, scratch_.get(), Act::Relu);
+      if (dump_) dump_nhwc(dump_, b.relu1, a, b.covers1);
       conv2d_timed(prof_, b.row2, a, b.conv2, mid, scratch_.get(), Act::Relu);
+      if (dump_) dump_nhwc(dump_, b.relu2, mid, b.covers2);
       const float* identity = x.data;
       if (b.has_downsample) {
         conv2d_timed(prof_, b.row_down, x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
         identity = tmp_identity_.data();
+        if (dump_) dump_nhwc(dump_, b.down, ConstTensorView(identity, b.out), b.covers_down);
       }
       const bool last = i + 1 == layers_[l].size();
       const TensorView out = last ? layer_out_[l].view() : TensorView{pingpong_[next].data(), b.out};
       // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
       conv2d_timed(prof_, b.row3, mid, b.conv3, out, scratch_.get(), Act::Relu, identity, true);
       x = ConstTensorView(out.data, out.shape);
+      if (dump_) {
+        dump_nhwc(dump_, b.relu3, x, b.covers3);
+        dump_nhwc(dump_, b.name, x, b.covers3 + "," + b.relu3);
+      }
       if (!last) next ^= 1;
     }
+    if (dump_) dump_nhwc(dump_, layer_names_[l], x);
     outs_.push_back(x);
   }
   return outs_;

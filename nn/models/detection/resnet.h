@@ -22,6 +22,9 @@ class ResNet50Backbone : public Backbone {
   std::unique_ptr<Backbone> clone() const override { return std::make_unique<ResNet50Backbone>(*this); }
   void plan(int h, int w, Profiler* layers) override;
   const std::vector<ConstTensorView>& forward(const ConstTensorView& in) override;
+  // backbone.body.relu (conv1+bn1+relu), .maxpool, per block .layerN.i.relu,
+  // .relu#1, .downsample, .relu#2 and .layerN.i, per layer .layerN.
+  void set_dump(DumpSink* sink) override { dump_ = sink; }
 
  private:
   struct Bottleneck {
@@ -29,6 +32,9 @@ class ResNet50Backbone : public Backbone {
     bool has_downsample = false;
     Shape a, b, out;  // planned output shapes of conv1, conv2, conv3 (= downsample's)
     int row1 = -1, row2 = -1, row3 = -1, row_down = -1;  // profiler rows
+    // PyTorch names of the tensors the fused convs produce (conv + frozen BN + ReLU):
+    // relu (after conv1/bn1), relu#1 (after conv2/bn2), downsample, the block (relu#2).
+    std::string name, relu1, relu2, relu3, down, covers1, covers2, covers3, covers_down;
   };
   Conv2dWeights stem_;
   Shape stem_shape_;
@@ -44,6 +50,9 @@ class ResNet50Backbone : public Backbone {
   std::vector<ConstTensorView> outs_;
   Profiler* prof_ = nullptr;
   int row_stem_ = -1, row_pool_ = -1;
+  DumpSink* dump_ = nullptr;
+  std::string stem_name_, stem_covers_, pool_name_;
+  std::vector<std::string> layer_names_;
 };
 
 }  // namespace nn::detection

@@ -48,7 +48,16 @@ RoiHeads::RoiHeads(const weights::SafeTensors& st, const std::string& p, const R
     throw Error(st.source() + ": " + std::to_string(cfg.num_classes) + " classes requested but the weights hold " +
                 std::to_string(classes_) + " ('" + p + "box_predictor.cls_score.weight' is [" +
                 std::to_string(classes_) + ", 1024])");
+  predictor_whole_ = cfg.num_classes <= 0 || cfg.num_classes == classes_;
   if (cfg.num_classes > 0) classes_ = cfg.num_classes;
+  prefix_ = p;
+  pool_name_ = p + "box_roi_pool";
+  head_name_ = p + "box_head";
+  head_covers_ = module_list(p + "box_head.", {"fc6", "fc7"});
+  cls_name_ = p + "box_predictor.cls_score";
+  box_name_ = p + "box_predictor.bbox_pred";
+  pred0_name_ = p + "box_predictor[0]";
+  pred1_name_ = p + "box_predictor[1]";
   const int in = kChannels * kPool * kPool;
   // fc6 reads torchvision's (C, 7, 7) flattening; our RoI features are (7, 7, C).
   const auto w6 = st.f32(p + "box_head.fc6.weight");
@@ -145,6 +154,16 @@ const Detections& RoiHeads::forward(const std::vector<ConstTensorView>& pooled, 
   linear(row_fc6_, features_.data(), static_cast<int>(per_roi), fc6_, fc6_bias_, Act::Relu, h6_.data());
   linear(row_fc7_, h6_.data(), hidden_, fc7_, fc7_bias_, Act::Relu, h7_.data());
   linear(row_predictor_, h7_.data(), hidden_, predictor_, predictor_bias_, Act::None, logits_.data());
+  if (dump_) {
+    dump_nhwc(dump_, pool_name_, ConstTensorView(features_.data(), Shape{r, kPool, kPool, kChannels}));
+    dump_rows(dump_, head_name_, h7_.data(), r, hidden_, 0, hidden_, head_covers_);
+    if (predictor_whole_) {  // with fewer classes in use, PyTorch's rows are longer
+      dump_rows(dump_, cls_name_, logits_.data(), r, 5 * c, 0, c);
+      dump_rows(dump_, box_name_, logits_.data(), r, 5 * c, c, 4 * c);
+      dump_rows(dump_, pred0_name_, logits_.data(), r, 5 * c, 0, c);
+      dump_rows(dump_, pred1_name_, logits_.data(), r, 5 * c, c, 4 * c);
+    }
+  }
   Profiler::Scope t_post(prof_, row_post_);
 
   boxes_.clear(), scores_.clear(), labels_.clear();

@@ -11,6 +11,7 @@
 #include "nn/gemm.h"
 #include "nn/profiler.h"
 #include "nn/models/detection/box_ops.h"
+#include "nn/dump.h"
 #include "nn/models/detection/layers.h"
 #include "nn/models/detection/transform.h"
 
@@ -46,8 +47,15 @@ class RoiHeads {
   // The result stays valid until the next forward; no allocation once planned.
   const Detections& forward(const std::vector<ConstTensorView>& pooled, const std::vector<Box>& proposals,
                             const ImageSizes& sizes);
+  // roi_heads.box_roi_pool [R, 256, 7, 7], roi_heads.box_head [R, 1024] (fc6, ReLU,
+  // fc7, ReLU fused: covers fc6 and fc7), roi_heads.box_predictor.cls_score [R, C],
+  // .bbox_pred [R, 4C] and the predictor's tuple [0] / [1] (nn/dump.h). Null: off.
+  void set_dump(DumpSink* sink) { dump_ = sink; }
 
  private:
+  DumpSink* dump_ = nullptr;
+  bool predictor_whole_ = true;  // every class of the weights in use
+  std::string prefix_, pool_name_, head_name_, head_covers_, cls_name_, box_name_, pred0_name_, pred1_name_;
   RoiHeadsConfig cfg_;
   int classes_ = 0, hidden_ = 1024;
   GemmWeights fc6_, fc7_, predictor_;

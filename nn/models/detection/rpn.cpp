@@ -14,7 +14,7 @@ std::vector<weights::TensorSpec> Rpn::tensor_specs(const std::string& p, int a) 
           {p + "bbox_pred.weight", {4 * a, 256, 1, 1}}, {p + "bbox_pred.bias", {4 * a}}};
 }
 
-Rpn::Rpn(const weights::SafeTensors& st, const std::string& p, const RpnConfig& cfg) : cfg_(cfg) {
+Rpn::Rpn(const weights::SafeTensors& st, const std::string& p, const RpnConfig& cfg) : cfg_(cfg), prefix_(p) {
   if (cfg.anchor_sizes.empty()) throw Error("RPN: no anchor sizes configured");
   a_ = static_cast<int>(cfg.anchor_sizes[0].size() * cfg.aspect_ratios.size());
   Conv2dParams cp;
@@ -38,7 +38,15 @@ void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
   anchors_.clear();
   scratch_ = ConvScratch();
   std::size_t largest = 0, candidates = 0;
+  names_.clear();
   for (std::size_t l = 0; l < levels.size(); ++l) {
+    // The head runs once per level: call k of a module is "name#k" (k > 0).
+    const std::string call = l ? "#" + std::to_string(l) : "";
+    const std::string head = prefix_.substr(0, prefix_.size() - 1), k = std::to_string(l);
+    names_.push_back({prefix_ + "conv" + call,
+                      module_list(prefix_, {"conv.0" + call, "conv.0.0" + call, "conv.0.1" + call}),
+                      prefix_ + "cls_logits" + call, prefix_ + "bbox_pred" + call, head + "[0][" + k + "]",
+                      head + "[1][" + k + "]"});
     const Shape& s = levels[l];
     hidden_[l].resize({1, s.h, s.w, 256});
     head_out_[l].resize({1, s.h, s.w, 5 * a_});
@@ -69,6 +77,16 @@ const Proposals& Rpn::forward(const std::vector<ConstTensorView>& levels, const 
     ep.bias = heads_bias_.data();
     const int pixels = static_cast<int>(hidden_[l].cview().pixels());
     gemm_parallel(pixels, hidden_[l].data.data(), 256, heads_, head_out_[l].data.data(), 5 * a_, ep);
+    if (dump_) {
+      const LevelNames& nm = names_[l];
+      const Shape hs = hidden_[l].shape;
+      dump_nhwc(dump_, nm.conv, hidden_[l].cview(), nm.conv_covers);
+      const float* o = head_out_[l].data.data();
+      dump_nhwc_channels(dump_, nm.cls, o, hs, 5 * a_, 0, a_);
+      dump_nhwc_channels(dump_, nm.box, o, hs, 5 * a_, a_, 4 * a_);
+      dump_nhwc_channels(dump_, nm.head_cls, o, hs, 5 * a_, 0, a_);
+      dump_nhwc_channels(dump_, nm.head_box, o, hs, 5 * a_, a_, 4 * a_);
+    }
     // Candidates of this level in (y, x, a) order, the order torchvision flattens them.
     const float* out = head_out_[l].data.data();
     const std::size_t count = static_cast<std::size_t>(pixels) * a_;

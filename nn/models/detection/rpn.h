@@ -9,6 +9,7 @@
 
 #include "nn/gemm.h"
 #include "nn/models/detection/box_ops.h"
+#include "nn/dump.h"
 #include "nn/models/detection/layers.h"
 #include "nn/models/detection/transform.h"
 
@@ -38,9 +39,19 @@ class Rpn {
   void plan(const std::vector<Shape>& levels, const ImageSizes& sizes);
   // The result stays valid until the next forward; no allocation once planned.
   const Proposals& forward(const std::vector<ConstTensorView>& levels, const ImageSizes& sizes);
+  // Per level k: rpn.head.conv#k (conv + ReLU fused), rpn.head.cls_logits#k,
+  // rpn.head.bbox_pred#k (one fused product), and RPNHead's output lists
+  // rpn.head[0][k] / rpn.head[1][k] (nn/dump.h). Null: off.
+  void set_dump(DumpSink* sink) { dump_ = sink; }
 
  private:
+  DumpSink* dump_ = nullptr;
+  struct LevelNames {
+    std::string conv, conv_covers, cls, box, head_cls, head_box;
+  };
+  std::vector<LevelNames> names_;
   RpnConfig cfg_;
+  std::string prefix_;  // "rpn.head."
   int a_ = 0;
   Conv2dWeights conv_;
   GemmWeights heads_;  // objectness (A) then deltas (4A) in one product

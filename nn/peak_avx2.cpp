@@ -1,8 +1,8 @@
-// The AVX2 FMA-throughput loop behind peak_gflops(): 12 independent ymm accumulators
+// The AVX2 FMA-throughput loop behind nn::peak_gflops() (nn/peak.h): 12 independent ymm accumulators
 // (FMA latency x FMA ports on current cores), registers only.
 #include <immintrin.h>
 
-namespace nnbench {
+namespace nn {
 
 double peak_fma_avx2(long iterations, float* sink) {
   __m256 acc[12];
@@ -21,4 +21,4 @@ double peak_fma_avx2(long iterations, float* sink) {
   return static_cast<double>(iterations) * 12 * 8 * 2;
 }
 
-}  // namespace nnbench
+}  // namespace nn

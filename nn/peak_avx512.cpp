@@ -1,8 +1,8 @@
-// The AVX-512 FMA-throughput loop behind peak_gflops(): 24 independent zmm accumulators
+// The AVX-512 FMA-throughput loop behind nn::peak_gflops() (nn/peak.h): 24 independent zmm accumulators
 // (more than FMA latency x FMA ports on current cores), registers only.
 #include <immintrin.h>
 
-namespace nnbench {
+namespace nn {
 
 // Runs `iterations` rounds of 24 FMAs on 16 lanes; returns the flops performed. Strict FP
 // semantics keep every FMA, and the result goes to *sink so the loop is not removed.
@@ -24,4 +24,4 @@ double peak_fma_avx512(long iterations, float* sink) {
   return static_cast<double>(iterations) * 24 * 16 * 2;
 }
 
-}  // namespace nnbench
+}  // namespace nn

@@ -1,0 +1,17 @@
+// The machine's FP32 FMA peak, measured with a register-only FMA loop of the widest
+// kernel set active (nn/isa.h), so "% of peak" figures hold on any CPU. Shared by
+// nn_bench's counters and `nnrun --profile --format json|csv`.
+#pragma once
+
+namespace nn {
+
+// GFLOP/s of `threads` threads running the active kernel set's loop at once (each
+// ~0.3 s, best of three runs: about a second per call; callers cache it).
+double peak_gflops(int threads);
+
+// One run of the loop of kernel set `isa` (0 scalar/SSE2, 1 AVX2, 2 AVX-512, as nn::Isa)
+// for `iterations` rounds on the calling thread; returns the flops performed and adds
+// to *sink so the loop is kept.
+double peak_loop(int isa, long iterations, float* sink);
+
+}  // namespace nn
