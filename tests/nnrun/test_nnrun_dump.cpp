@@ -256,7 +256,9 @@ TEST_F(NnrunDump, ProfileJsonParsesAndNamesTheDumpsTensors) {
                        n == "features.7";  // a stage is its last block: no row of its own
     const bool mlp_layer = n.find(".block.") != std::string::npos && n.find(".block.0") == std::string::npos;
     if (mlp_layer) continue;  // computed for the dump only; the fused tile's row is the block
-    if (!stage) EXPECT_TRUE(names.count(n)) << n;
+    if (!stage) {
+      EXPECT_TRUE(names.count(n)) << n;
+    }
   }
 }
 
