@@ -135,7 +135,7 @@ BENCHMARK(BM_ConvNeXtTinyBf16)
 // discards them (the NHWC -> NCHW conversions). Run on a quiet machine, e.g. with
 //   --benchmark_filter=ConvNeXtDump --benchmark_repetitions=10
 //   --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true
-// and compare the medians of Never and SwitchedOff (equal within noise).
+// and compare the medians of never and switched_off (equal within noise).
 struct DiscardingSink : nn::DumpSink {
   bool wants(const std::string&) const override { return true; }
   void tensor(const std::string&, const std::vector<std::int64_t>&, const float* data, const std::string&) override {
@@ -145,7 +145,7 @@ struct DiscardingSink : nn::DumpSink {
 
 enum class DumpState { Never, SwitchedOff, On };
 
-void run_dump_state(benchmark::State& state, DumpState mode) {
+void BM_ConvNeXtDump(benchmark::State& state, DumpState mode) {
   TinyRun run(state);
   DiscardingSink sink;
   if (mode != DumpState::Never) {
@@ -157,30 +157,17 @@ void run_dump_state(benchmark::State& state, DumpState mode) {
   nnbench::set_flop_counters(state, run.model.flops(), run.threads);
 }
 
-void BM_ConvNeXtDumpNever(benchmark::State& state) { run_dump_state(state, DumpState::Never); }
-void BM_ConvNeXtDumpSwitchedOff(benchmark::State& state) { run_dump_state(state, DumpState::SwitchedOff); }
-void BM_ConvNeXtDumpOn(benchmark::State& state) { run_dump_state(state, DumpState::On); }
+void dump_cases(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"h", "w", "threads"})
+      ->Args({224, 224, 1})
+      ->Args({224, 224, 2})
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->MinTime(1.0);
+}
 
-BENCHMARK(BM_ConvNeXtDumpNever)
-    ->ArgNames({"h", "w", "threads"})
-    ->Args({224, 224, 1})
-    ->Args({224, 224, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK(BM_ConvNeXtDumpSwitchedOff)
-    ->ArgNames({"h", "w", "threads"})
-    ->Args({224, 224, 1})
-    ->Args({224, 224, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK(BM_ConvNeXtDumpOn)
-    ->ArgNames({"h", "w", "threads"})
-    ->Args({224, 224, 1})
-    ->Args({224, 224, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_ConvNeXtDump, never, DumpState::Never)->Apply(dump_cases);
+BENCHMARK_CAPTURE(BM_ConvNeXtDump, switched_off, DumpState::SwitchedOff)->Apply(dump_cases);
+BENCHMARK_CAPTURE(BM_ConvNeXtDump, on, DumpState::On)->Apply(dump_cases);
 
 }  // namespace

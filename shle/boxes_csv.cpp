@@ -7,30 +7,9 @@
 
 #include "shle/error.h"
 #include "shle/file_read.h"
+#include "shle/text_fields.h"
 
 namespace shle {
-namespace {
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
-// Plain decimal numbers only: strtod alone would also take "inf", "nan" and hex.
-bool parse_number(std::string_view t, double* out) {
-  if (t.empty() || t.size() > 64) return false;
-  for (char c : t)
-    if (!((c >= '0' && c <= '9') || c == '.' || c == '-' || c == '+' || c == 'e' || c == 'E')) return false;
-  std::string s(t);
-  char* end = nullptr;
-  double v = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
-}
-
-}  // namespace
 
 BoxesFile parse_boxes_csv(std::string_view text, const std::string& source) {
   BoxesFile f;
@@ -40,13 +19,13 @@ BoxesFile parse_boxes_csv(std::string_view text, const std::string& source) {
     std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
     pos = nl == std::string_view::npos ? text.size() : nl + 1;
     ++line_no;
-    std::string_view t = trim(line);
+    std::string_view t = trim_field(line);
     if (t.empty() || t.front() == '#') continue;
     std::vector<std::string_view> fields;
     std::size_t start = 0;
     while (true) {
       std::size_t comma = t.find(',', start);
-      fields.push_back(trim(t.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+      fields.push_back(trim_field(t.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
       if (comma == std::string_view::npos) break;
       start = comma + 1;
     }
@@ -69,7 +48,7 @@ BoxesFile parse_boxes_csv(std::string_view text, const std::string& source) {
     double v[5];
     static const char* names[5] = {"x0", "y0", "x1", "y1", "score"};
     for (int i = 0; i < 5; ++i)
-      if (!parse_number(fields[i + 1], &v[i]))
+      if (!parse_decimal(fields[i + 1], &v[i]))
         throw Error(where + names[i] + " " + weights::quote_name(std::string(fields[i + 1])) + " is not a finite number");
     if (v[2] < v[0] || v[3] < v[1]) throw Error(where + "box has x1 < x0 or y1 < y0");
     f.frames[frame].push_back(Candidate{Box{v[0], v[1], v[2], v[3]}, v[4]});

@@ -6,6 +6,7 @@
 
 #include "shle/error.h"
 #include "shle/file_read.h"
+#include "shle/text_fields.h"
 #include "weights/quote_name.h"
 
 namespace shle {
@@ -13,21 +14,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
 // A plain decimal height in (0, 100] m, or false.
 bool parse_height(std::string_view t, double* out) {
-  if (t.empty() || t.size() > 32) return false;
-  for (char c : t)
-    if (!((c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E' || c == '-' || c == '+')) return false;
-  std::string s(t);
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || !std::isfinite(v) || !(v > 0) || v > 100) return false;
+  double v = 0;
+  if (t.size() > 32 || !parse_decimal(t, &v) || !(v > 0) || v > 100) return false;
   *out = v;
   return true;
 }
@@ -87,13 +77,13 @@ std::map<int, double> parse_gt_heights(std::string_view text, const std::string&
     std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
     pos = nl == std::string_view::npos ? text.size() : nl + 1;
     ++line_no;
-    std::string_view t = trim(line);
+    std::string_view t = trim_field(line);
     if (t.empty() || t.front() == '#') continue;
     const std::string where = source + ": line " + std::to_string(line_no) + ": ";
     std::size_t comma = t.find(',');
     if (comma == std::string_view::npos || t.find(',', comma + 1) != std::string_view::npos)
       throw Error(where + "expected scene,height");
-    std::string_view a = trim(t.substr(0, comma)), b = trim(t.substr(comma + 1));
+    std::string_view a = trim_field(t.substr(0, comma)), b = trim_field(t.substr(comma + 1));
     if (first && a == "scene") {
       first = false;
       continue;
@@ -118,13 +108,13 @@ void parse_gt_height_args(std::string_view text, std::map<int, double>* table) {
   std::size_t pos = 0;
   while (true) {
     std::size_t comma = text.find(',', pos);
-    std::string_view item = trim(text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+    std::string_view item = trim_field(text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
     std::size_t eq = item.find('=');
     if (eq == std::string_view::npos) throw Error("--gt-height " + quoted(item) + ": expected SCENE=METRES, e.g. 17=2.85");
-    const int id = parse_scene_id(trim(item.substr(0, eq)));
+    const int id = parse_scene_id(trim_field(item.substr(0, eq)));
     double h = 0;
     if (id < 0) throw Error("--gt-height " + quoted(item) + ": the scene is not a number (17, 017 or images_017)");
-    if (!parse_height(trim(item.substr(eq + 1)), &h))
+    if (!parse_height(trim_field(item.substr(eq + 1)), &h))
       throw Error("--gt-height " + quoted(item) + ": the height is not a number of metres in (0, 100]");
     (*table)[id] = h;
     if (comma == std::string_view::npos) break;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cstring>
 
+#include "stixel/decimal_text.h"
 #include "stixel/error.h"
 
 namespace stixel {
@@ -19,17 +20,6 @@ void put_f32(std::vector<std::uint8_t>& out, float f) {
   put_u32(out, bits);
 }
 
-void append_float(std::string& out, float f) {
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof buf, f);
-  out.append(buf, r.ptr);
-}
-
-void append_int(std::string& out, long long v) {
-  char buf[24];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  out.append(buf, r.ptr);
-}
 
 }  // namespace
 

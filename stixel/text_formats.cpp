@@ -4,24 +4,12 @@
 #include <cmath>
 #include <cstring>
 
+#include "stixel/decimal_text.h"
 #include "stixel/error.h"
 #include "stixel/stx1.h"
 
 namespace stixel {
 namespace {
-
-// Shortest decimal text that parses back to the same float32.
-void append_float(std::string& out, float f) {
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof buf, f);
-  out.append(buf, r.ptr);
-}
-
-void append_int(std::string& out, long long v) {
-  char buf[24];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  out.append(buf, r.ptr);
-}
 
 void append_csv_field(std::string& out, const std::string& s) {
   if (s.find_first_of(",\"\r\n") == std::string::npos) {

@@ -22,23 +22,9 @@ namespace fs = std::filesystem;
 using shletest::TempDir;
 using shletest::write_text;
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-Result run(const std::string& args, const TempDir& dir) {
-  std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
-  int status = std::system((args + " > '" + out + "' 2> '" + err + "'").c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+using shletest::Result;
+using shletest::run;
+using shletest::slurp;
 
 // A 4-frame Disparity Height dataset (scenes 17, 18, 19), written once.
 const std::string& dataset() {

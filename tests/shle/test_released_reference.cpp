@@ -22,12 +22,7 @@ namespace {
 
 using shletest::TempDir;
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using shletest::slurp;
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -38,13 +33,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-std::vector<double> f64(const weights::SafeTensors& st, const std::string& name) {
-  const weights::TensorInfo& info = st.info(name);
-  EXPECT_EQ(info.dtype, weights::DType::F64) << name;
-  std::vector<double> v(static_cast<std::size_t>(info.numel()));
-  if (!v.empty()) std::memcpy(v.data(), st.raw(name), 8 * v.size());
-  return v;
-}
+using shletest::f64;
 
 struct Heights {
   std::vector<double> raw, filtered;  // NaN = empty field

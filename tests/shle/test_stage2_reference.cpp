@@ -14,6 +14,7 @@
 #include "shle/disparity_io.h"
 #include "shle/height.h"
 #include "shle/labelme.h"
+#include "tests/shle/test_util.h"
 #include "weights/safetensors.h"
 
 namespace {
@@ -52,13 +53,7 @@ std::vector<Config> configs() {
   return c;
 }
 
-std::vector<double> f64(const weights::SafeTensors& st, const std::string& name) {
-  const weights::TensorInfo& info = st.info(name);
-  EXPECT_EQ(info.dtype, weights::DType::F64) << name;
-  std::vector<double> v(static_cast<std::size_t>(info.numel()));
-  if (!v.empty()) std::memcpy(v.data(), st.raw(name), 8 * v.size());
-  return v;
-}
+using shletest::f64;
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;

@@ -1,15 +1,20 @@
 // Helpers for the SHLE tests: a temporary folder removed at the end, file
-// writers, and a check that an expression throws with a message containing text.
+// writers, a command runner, and a check that an expression throws with a message containing text.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <sys/wait.h>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include "weights/safetensors.h"
 
 namespace shletest {
 
@@ -40,6 +45,35 @@ inline void write_bytes(const std::string& path, const std::vector<std::uint8_t>
 
 inline void write_text(const std::string& path, const std::string& text) {
   write_bytes(path, std::vector<std::uint8_t>(text.begin(), text.end()));
+}
+
+inline std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// A command's exit code and captured standard output and error.
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+// Runs a shell command line with stdout/stderr captured in files of `dir`.
+inline Result run(const std::string& args, const TempDir& dir) {
+  std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
+  int status = std::system((args + " > '" + out + "' 2> '" + err + "'").c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+// A reference file's F64 tensor as doubles (the dtype is checked).
+inline std::vector<double> f64(const weights::SafeTensors& st, const std::string& name) {
+  const weights::TensorInfo& info = st.info(name);
+  EXPECT_EQ(info.dtype, weights::DType::F64) << name;
+  std::vector<double> v(static_cast<std::size_t>(info.numel()));
+  if (!v.empty()) std::memcpy(v.data(), st.raw(name), 8 * v.size());
+  return v;
 }
 
 }  // namespace shletest
