@@ -7,7 +7,7 @@ same everywhere:
   convnext_from_widths(torch, ...)   any ConvNeXt features configuration
   stixel_heads(torch)                (HeadV0V3, HeadV4): the StixelNExT++ head variants,
                                      written from ../shared/reference/stixelnext.md §1.3
-  StixelNExT(torch, features, head)  features.* (backbone) + classifier.* (head)
+  stixelnext(torch, features, head)  features.* (backbone), avgpool, classifier.* (head)
   detector(torch, builder, classes)  torchvision's Faster R-CNN constructors, untrained
 torch is passed in (never imported here) so that importing this module has no side
 effects and callers keep their own install hint.
@@ -131,17 +131,30 @@ def pool_feature_rows(torch, f):
 
 
 def stixelnext(torch, features, head):
-    """The authors' module tree: features.* (ConvNeXt-Tiny's features), classifier.* (head);
-    forward: head(mean over rows of features(x)) -> [N, A, 64, U]."""
+    """The authors' module tree: features.* (ConvNeXt-Tiny's features), avgpool (the mean
+    over all feature rows), classifier.* (head); forward: classifier(avgpool(features(x)))
+    -> [N, A, 64, U]."""
+
+    class AvgPoolRows(torch.nn.Module):
+        """The authors' `avgpool`, AvgPool2d((rows, 1)) with `rows` hard-coded for their
+        input height (../shared/reference/stixelnext.md §1.1); here the kernel is the
+        height of whatever comes in, so any input size runs. A module (not a function
+        call) so that named_modules() has `avgpool`, as the authors' model does and as
+        nnrun --dump names it; the same avg_pool2d call as pool_feature_rows, so the
+        outputs are the same bits as the reference scripts'."""
+
+        def forward(self, f):
+            return pool_feature_rows(torch, f)
 
     class StixelNExT(torch.nn.Module):
         def __init__(self):
             super().__init__()
             self.features = features
+            self.avgpool = AvgPoolRows()
             self.classifier = head
 
         def forward(self, x):
-            return self.classifier(pool_feature_rows(torch, self.features(x)))
+            return self.classifier(self.avgpool(self.features(x)))
 
     return StixelNExT()
 

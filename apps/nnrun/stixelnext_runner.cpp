@@ -47,7 +47,7 @@ class StixelNExTRunner : public Runner {
 
   nn::Profiler* profiler() override { return &model_.profiler(); }
   void set_dump(nn::DumpSink* dump) override { model_.set_dump(dump); }
-  std::string dump_path() const override { return model_.backbone().dump_path(); }
+  std::string dump_path() const override { return model_.dump_path(); }
 
  private:
   static stixel::ModelSettings settings_of(const weights::SafeTensors& w, nn::Precision precision) {

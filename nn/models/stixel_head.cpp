@@ -157,6 +157,8 @@ StixelHead::StixelHead(const weights::SafeTensors& st, const std::string& prefix
 
   // Dump names (PyTorch's module tree of the head, stixel_head_ref.py).
   name_dw_ = prefix + "local_mixing.depthwise";
+  name_pw_ = prefix + "local_mixing.pointwise";
+  name_mix_ = prefix + "local_mixing";
   name_reduce_ = prefix + reduce;
   name_norm_ = prefix + norm;
   if (norm.size() > 2 && norm.compare(norm.size() - 2, 2, ".1") == 0) {  // Sequential(Upsample, LayerNorm2d)
@@ -269,6 +271,7 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
     mix.residual = features;
     mix.ldr = c;
     gemm(m, a_.data(), c, mix_pw_, b_.data(), c, mix);
+    if (dump_) dump_local_mixing(n, w);
     GemmEpilogue red;
     red.bias = reduce_bias_.data();
     gemm(m, b_.data(), c, reduce_, c_buf_.data(), reduced_, red);
@@ -317,6 +320,24 @@ void StixelHead::forward(const ConstTensorView& pooled, int columns, float* out)
       for (int u = 0; u < columns; ++u)
         dst[u] = result[(static_cast<std::size_t>(b) * w + nearest_source(u, w, columns)) * channels + ch];
     }
+}
+
+void StixelHead::dump_local_mixing(int n, int w) {
+  if (!dump_->wants(name_pw_) && !dump_->wants(name_mix_)) return;
+  const int m = n * w;
+  dump_mix_.resize(static_cast<std::size_t>(m) * c_);
+  GemmEpilogue pw;
+  pw.bias = mix_pw_bias_.data();
+  gemm(m, a_.data(), c_, mix_pw_, dump_mix_.data(), c_, pw);
+  const ConstTensorView v(dump_mix_.data(), Shape{n, 1, w, c_});
+  dump_nhwc(dump_, name_pw_, v);
+  dump_nhwc(dump_, name_mix_, v);  // LocalColumnMixing returns its pointwise conv's output
+}
+
+std::string StixelHead::dump_path() const {
+  if (variant_ != StixelHeadVariant::V4) return "";
+  return "the head's " + name_mix_ + " (= " + name_pw_ +
+         ", whose product the engine fuses with the residual) computed a second time without the residual";
 }
 
 // The reduced features before (the 1x1 conv's output, then Upsample's) or after the

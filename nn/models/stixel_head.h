@@ -65,12 +65,15 @@ class StixelHead {
   void forward(const ConstTensorView& pooled, int columns, float* out);
 
   // Intermediate tensors under the PyTorch head's module names (prefix "classifier."):
-  // V4 local_mixing.depthwise, shared_reduce, up.0, up.1, up; V1/V3 the attention's
+  // V4 local_mixing.depthwise, local_mixing.pointwise, local_mixing, shared_reduce, up.0,
+  // up.1, up; V1/V3 the attention's
   // query/key/value layers and attention_layer; channel_reduce (V0: its own name),
   // up.0, up.1, up. Null: off. The head's output itself is dumped by the model.
   void set_dump(DumpSink* sink) { dump_ = sink; }
   // What the head's output tensor stands for where the engine fused modules ("" if none).
   const std::string& output_covers() const { return output_covers_; }
+  // What the head computes apart for a dump ("" if nothing): dump.path's part.
+  std::string dump_path() const;
 
  private:
   // rows [n * w, k] (NHWC, one feature row) as PyTorch's [n, k, 1, columns] after the
@@ -82,6 +85,9 @@ class StixelHead {
   void dump_columns(const std::string& name, const float* rows, int n, int w, int ld, int c0, int k,
                     bool as_nchw) const;
 
+  // V4: local_mixing's output, pointwise(GELU(depthwise(x))) from a_, which forward()
+  // fuses with the residual x into one product; computed again without it, for the dump.
+  void dump_local_mixing(int n, int w);
   void attention(const float* x, int n, int w, float* att) const;
 
   StixelHeadVariant variant_;
@@ -99,9 +105,10 @@ class StixelHead {
   AlignedBuffer reduce_bias_, ln_gamma_, ln_beta_;
   // scratch
   AlignedBuffer a_, b_, c_buf_;
+  std::vector<float> dump_mix_;  // grown only while dumping (dump_local_mixing)
   int planned_n_ = 0, planned_w_ = 0;
   DumpSink* dump_ = nullptr;
-  std::string name_dw_, name_reduce_, name_up0_, name_norm_, name_up_, name_att_, name_q_, name_k_, name_v_;
+  std::string name_dw_, name_pw_, name_mix_, name_reduce_, name_up0_, name_norm_, name_up_, name_att_, name_q_, name_k_, name_v_;
   std::string output_covers_;
 };
 

@@ -36,6 +36,11 @@ class StixelNExT {
   // Intermediate tensors under the authors' module names: the backbone's `features.*`,
   // `avgpool`, the head's `classifier.*` and `classifier` (the prediction). Null: off.
   void set_dump(DumpSink* sink);
+  // dump.path: what the backbone and the head compute apart for a dump.
+  std::string dump_path() const {
+    const std::string head = head_.dump_path();
+    return head.empty() ? backbone_.dump_path() : backbone_.dump_path() + "; " + head;
+  }
 
  private:
   ConvNeXt backbone_;
