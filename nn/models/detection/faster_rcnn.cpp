@@ -2,6 +2,7 @@
 
 #include "nn/error.h"
 #include "nn/models/detection/mobilenet_v3.h"
+#include "nn/models/detection/pyramid_plan.h"
 #include "nn/models/detection/resnet.h"
 
 namespace nn::detection {
@@ -112,19 +113,12 @@ void FasterRcnn::plan(int h, int w) {
   normalised_.resize({1, h, w, 3});
   resized_.resize({1, sizes_.resized_h, sizes_.resized_w, 3});
   layer_profiler_.clear();
-  backbone_->plan(sizes_.padded_h, sizes_.padded_w, &layer_profiler_);
-  // Shapes follow from a dry run of the size rules of each part.
-  std::vector<ConstTensorView> feats = backbone_->forward(input_.cview());
-  std::vector<Shape> fs;
-  for (auto& f : feats) fs.push_back(f.shape);
-  fpn_.plan(fs);
-  std::vector<ConstTensorView> pyramid = fpn_.forward(feats);
-  std::vector<Shape> ps;
-  for (auto& p : pyramid) ps.push_back(p.shape);
+  const PyramidShapes shapes = plan_pyramid(*backbone_, fpn_, input_.cview(), &layer_profiler_);
+  std::vector<Shape> ps = shapes.pyramid;
   rpn_.plan(ps, sizes_);
   ps.pop_back();  // 'pool' feeds only the RPN
   roi_heads_.plan(ps, sizes_, cfg_.rpn.post_nms_top_n, &layer_profiler_);
-  pooled_.reserve(pyramid.size());
+  pooled_.reserve(ps.size() + 1);
   const std::size_t rois = static_cast<std::size_t>(std::max(cfg_.rpn.post_nms_top_n, 0));
   proposals_.boxes.reserve(rois);
   proposals_.scores.reserve(rois);
@@ -137,9 +131,9 @@ void FasterRcnn::plan(int h, int w) {
   transform_name_ = "transform[0]";
   proposals_name_ = "rpn[0][0]";
   body_names_.clear(), fpn_names_.clear(), backbone_names_.clear();
-  for (std::size_t i = 0; i < feats.size(); ++i) body_names_.push_back("backbone.body[" + std::to_string(i) + "]");
-  for (std::size_t i = 0; i < pyramid.size(); ++i) {
-    const std::string key = i + 1 < pyramid.size() ? std::to_string(i) : "pool";
+  for (std::size_t i = 0; i < shapes.features.size(); ++i) body_names_.push_back("backbone.body[" + std::to_string(i) + "]");
+  for (std::size_t i = 0; i < shapes.pyramid.size(); ++i) {
+    const std::string key = i + 1 < shapes.pyramid.size() ? std::to_string(i) : "pool";
     fpn_names_.push_back("backbone.fpn[" + key + "]");
     backbone_names_.push_back("backbone[" + key + "]");
   }
