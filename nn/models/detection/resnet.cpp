@@ -89,6 +89,7 @@ ResNet50Backbone::ResNet50Backbone(const weights::SafeTensors& st, const std::st
   stem_ = load_conv_bn(st, stem.weight, stem.bn, conv(3, 64, 7, 2), eps);
   // detectron2's BasicStem returns after its max pool, its ReLU is functional.
   stem_name_ = d2 ? "" : prefix + "relu";
+  stem_row_ = d2 ? prefix + "stem.conv1" : stem_name_;
   stem_covers_ = module_list(prefix, {"conv1", "bn1"});
   pool_name_ = d2 ? prefix + "stem" : prefix + "maxpool";
   for (int l = 0; l < 4; ++l) layer_names_.push_back(stage_name(prefix, layout, l));
@@ -109,6 +110,8 @@ ResNet50Backbone::ResNet50Backbone(const weights::SafeTensors& st, const std::st
     };
     blk.down = c0.weight.substr(0, c0.weight.size() - 7);
     if (!d2) blk.down = b + "downsample";
+    blk.row1 = d2 ? c1.weight.substr(0, c1.weight.size() - 7) : blk.relu1;
+    blk.row2 = d2 ? c2.weight.substr(0, c2.weight.size() - 7) : blk.relu2;
     blk.covers1 = covers(c1);
     blk.covers2 = covers(c2);
     blk.covers3 = covers(c3);  // + the residual add
@@ -132,7 +135,7 @@ void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
   Shape s = stem_shape_ = conv2d_output_shape({1, h, w, 3}, stem_.params());
   scratch_.require(stem_, s.w);
   grow(pp_max, s);
-  row_stem_ = add_conv_row(prof, stem_name_, stem_, s);
+  row_stem_ = add_conv_row(prof, stem_row_, stem_, s);
   s = max_pool2d_output_shape(s, MaxPoolParams{});
   pooled_.resize(s);
   if (prof) row_pool_ = prof->add(pool_name_, "max pool 3x3/2", nchw_str(s), 0);
@@ -147,10 +150,10 @@ void ResNet50Backbone::plan(int h, int w, Profiler* prof) {
       grow(b_max, b.b);
       if (b.has_downsample) grow(id_max, conv2d_output_shape(s, b.downsample.params()));
       // Rows under the dump's names: each fused conv's output tensor.
-      b.row1 = add_conv_row(prof, b.relu1, b.conv1, b.a);
-      b.row2 = add_conv_row(prof, b.relu2, b.conv2, b.b);
-      if (b.has_downsample) b.row_down = add_conv_row(prof, b.down, b.downsample, b.out);
-      b.row3 = add_conv_row(prof, b.name, b.conv3, b.out);
+      b.prow1 = add_conv_row(prof, b.row1, b.conv1, b.a);
+      b.prow2 = add_conv_row(prof, b.row2, b.conv2, b.b);
+      if (b.has_downsample) b.prow_down = add_conv_row(prof, b.down, b.downsample, b.out);
+      b.prow3 = add_conv_row(prof, b.name, b.conv3, b.out);
       if (i + 1 < layers_[l].size()) grow(pp_max, b.out);
       scratch_.require(b.conv1, b.a.w);
       scratch_.require(b.conv2, b.b.w);
@@ -186,20 +189,20 @@ const std::vector<ConstTensorView>& ResNet50Backbone::forward(const ConstTensorV
     for (std::size_t i = 0; i < layers_[l].size(); ++i) {
       Bottleneck& b = layers_[l][i];
       const TensorView a{tmp_a_.data(), b.a}, mid{tmp_b_.data(), b.b};
-      conv2d_timed(prof_, b.row1, x, b.conv1, a, scratch_.get(), Act::Relu);
+      conv2d_timed(prof_, b.prow1, x, b.conv1, a, scratch_.get(), Act::Relu);
       if (dump_ && !b.relu1.empty()) dump_nhwc(dump_, b.relu1, a, b.covers1);
-      conv2d_timed(prof_, b.row2, a, b.conv2, mid, scratch_.get(), Act::Relu);
+      conv2d_timed(prof_, b.prow2, a, b.conv2, mid, scratch_.get(), Act::Relu);
       if (dump_ && !b.relu2.empty()) dump_nhwc(dump_, b.relu2, mid, b.covers2);
       const float* identity = x.data;
       if (b.has_downsample) {
-        conv2d_timed(prof_, b.row_down, x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
+        conv2d_timed(prof_, b.prow_down, x, b.downsample, TensorView{tmp_identity_.data(), b.out}, scratch_.get());
         identity = tmp_identity_.data();
         if (dump_) dump_nhwc(dump_, b.down, ConstTensorView(identity, b.out), b.covers_down);
       }
       const bool last = i + 1 == layers_[l].size();
       const TensorView out = last ? layer_out_[l].view() : TensorView{pingpong_[next].data(), b.out};
       // relu(bn3(conv3) + identity): the epilogue's act_after_residual.
-      conv2d_timed(prof_, b.row3, mid, b.conv3, out, scratch_.get(), Act::Relu, identity, true);
+      conv2d_timed(prof_, b.prow3, mid, b.conv3, out, scratch_.get(), Act::Relu, identity, true);
       x = ConstTensorView(out.data, out.shape);
       if (dump_) {
         if (!b.relu3.empty()) dump_nhwc(dump_, b.relu3, x, b.covers3);

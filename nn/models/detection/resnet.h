@@ -41,10 +41,11 @@ class ResNet50Backbone : public Backbone {
     Conv2dWeights conv1, conv2, conv3, downsample;
     bool has_downsample = false;
     Shape a, b, out;  // planned output shapes of conv1, conv2, conv3 (= downsample's)
-    int row1 = -1, row2 = -1, row3 = -1, row_down = -1;  // profiler rows
+    int prow1 = -1, prow2 = -1, prow3 = -1, prow_down = -1;  // profiler rows
     // PyTorch names of the tensors the fused convs produce (conv + frozen BN + ReLU):
     // relu (after conv1/bn1), relu#1 (after conv2/bn2), downsample, the block (relu#2).
     std::string name, relu1, relu2, relu3, down, covers1, covers2, covers3, covers_down;
+    std::string row1, row2;  // profiler row names of conv1, conv2 (the dump names where there are)
   };
   Conv2dWeights stem_;
   Shape stem_shape_;
@@ -61,7 +62,7 @@ class ResNet50Backbone : public Backbone {
   Profiler* prof_ = nullptr;
   int row_stem_ = -1, row_pool_ = -1;
   DumpSink* dump_ = nullptr;
-  std::string stem_name_, stem_covers_, pool_name_;
+  std::string stem_name_, stem_row_, stem_covers_, pool_name_;
   std::vector<std::string> layer_names_;
 };
 
