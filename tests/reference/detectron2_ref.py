@@ -269,27 +269,37 @@ class Detectron2:
         keep = batched_nms(boxes, probs, inds[:, 1], 0.5)[:100]
         return boxes[keep], probs[keep], inds[keep, 1]
 
-    def __call__(self, rgb):
+    def preprocess(self, rgb):
+        """GeneralizedRCNN.preprocess_image after the mapper: the Pillow resize, BGR,
+        normalisation, zero padding to a multiple of 32."""
         torch, F = self.t, self.F
-        H, W = rgb.shape[:2]
-        h, w = output_size(H, W)
+        h, w = output_size(*rgb.shape[:2])
         resized = pil_resize(rgb, h, w)
         x = torch.as_tensor(np.ascontiguousarray(resized[:, :, ::-1]).astype(np.float32)).permute(2, 0, 1)
         x = (x - torch.tensor(MEAN_BGR).view(3, 1, 1)) / torch.tensor([1.0, 1.0, 1.0]).view(3, 1, 1)
         ph, pw = (h + 31) // 32 * 32, (w + 31) // 32 * 32
-        x = F.pad(x, (0, pw - w, 0, ph - h), value=0.0)[None]
-        pyramid = self.fpn(self.bottom_up(x))
-        proposals, logits = self.rpn(pyramid, (h, w))
-        boxes, scores, classes = self.roi_heads(pyramid[:4], proposals, (h, w))
-        # detector_postprocess: scale (Python doubles on float32), clip, nonempty
+        return F.pad(x, (0, pw - w, 0, ph - h), value=0.0)[None], resized
+
+    @staticmethod
+    def postprocess(boxes, scores, classes, original, resized):
+        """detector_postprocess: scale (Python doubles on float32), clip, nonempty."""
+        (H, W), (h, w) = original, resized
         sx, sy = W / w, H / h
         boxes = boxes.clone()
         boxes[:, 0::2] *= sx
         boxes[:, 1::2] *= sy
-        boxes = self.clip(boxes, H, W)
+        boxes = Detectron2.clip(boxes, H, W)
         keep = ((boxes[:, 2] - boxes[:, 0]) > 0) & ((boxes[:, 3] - boxes[:, 1]) > 0)
-        return dict(resized=resized, proposals=proposals, proposal_logits=logits, head_logits=None,
-                    boxes=boxes[keep], scores=scores[keep], classes=classes[keep])
+        return boxes[keep], scores[keep], classes[keep]
+
+    def __call__(self, rgb):
+        x, resized = self.preprocess(rgb)
+        size = resized.shape[:2]
+        pyramid = self.fpn(self.bottom_up(x))
+        proposals, logits = self.rpn(pyramid, size)
+        boxes, scores, classes = self.postprocess(*self.roi_heads(pyramid[:4], proposals, size), rgb.shape[:2], size)
+        return dict(resized=resized, proposals=proposals, proposal_logits=logits, boxes=boxes, scores=scores,
+                    classes=classes)
 
 
 def calibrate(torch, sd, model, rgb):
