@@ -118,39 +118,94 @@ TEST(Detectron2Torch, DeterministicAcrossThreadCounts) {
 // Weights problems are one clear message naming the tensor.
 namespace {
 
-weights::SafeTensors synthetic(int classes, const std::string& drop = "", const std::string& extra = "") {
-  auto specs = det::detectron2_faster_rcnn_tensor_specs(classes);
-  std::vector<weights::TensorSpec> kept;
-  for (const auto& s : specs)
-    if (s.name != drop) kept.push_back(s);
-  if (!extra.empty()) kept.push_back({extra, {4}});
-  return weights::SafeTensors::from_bytes(nn::synthetic_weights(kept, 3).bytes(), "w.safetensors");
+// Seeded random weights for K = 2 (made once), or a copy without `drop`, with an
+// `extra` tensor, or with cls_score for `classes` rows.
+weights::SafeTensors synthetic(const std::string& drop = "", const std::string& extra = "", int classes = 3) {
+  static const weights::SafeTensors base = weights::SafeTensors::from_bytes(
+      nn::synthetic_weights(det::detectron2_faster_rcnn_tensor_specs(3), 3).bytes(), "w.safetensors");
+  if (drop.empty() && extra.empty() && classes == 3) return base;
+  weights::Writer w;
+  for (const std::string& name : base.names()) {
+    if (name == drop) continue;
+    const weights::TensorInfo& info = base.info(name);
+    if (name.rfind("roi_heads.box_predictor.cls_score.", 0) == 0 && classes != 3) {
+      std::vector<std::int64_t> shape = info.shape;
+      shape[0] = classes;
+      const std::vector<float> v(static_cast<std::size_t>(classes) * (shape.size() > 1 ? shape[1] : 1), 0.5f);
+      w.add_f32(name, shape, v.data());
+      continue;
+    }
+    w.add(name, info.dtype, info.shape, base.raw(name));
+  }
+  if (!extra.empty()) {
+    const float v[4] = {};
+    w.add_f32(extra, {4}, v);
+  }
+  return weights::SafeTensors::from_bytes(w.bytes(), "w.safetensors");
 }
 
 TEST(Detectron2Errors, CheckpointHas295Tensors) {
   EXPECT_EQ(det::detectron2_faster_rcnn_tensor_specs(2).size(), 295u);
+  EXPECT_EQ(det::detectron2_faster_rcnn_tensor_specs(2)[0].name, "backbone.bottom_up.stem.conv1.weight");
 }
 
 TEST(Detectron2Errors, MissingTensorIsNamed) {
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic(2, "backbone.bottom_up.res3.0.conv1.norm.running_var")); });
+  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("backbone.bottom_up.res3.0.conv1.norm.running_var")); });
   EXPECT_NE(msg.find("w.safetensors"), std::string::npos) << msg;
   EXPECT_NE(msg.find("backbone.bottom_up.res3.0.conv1.norm.running_var"), std::string::npos) << msg;
 }
 
 TEST(Detectron2Errors, ExtraTensorIsAnotherArchitecture) {
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic(2, "", "backbone.body.conv1.weight")); });
+  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "backbone.body.conv1.weight")); });
   EXPECT_NE(msg.find("unexpected tensor 'backbone.body.conv1.weight'"), std::string::npos) << msg;
 }
 
 TEST(Detectron2Errors, ScoreRowsWithoutBackgroundRefused) {
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic(1)); });
+  // One score row: no room for the background.
+  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 1)); });
   EXPECT_NE(msg.find("cls_score"), std::string::npos) << msg;
+  // K + 1 rows must match bbox_pred's 4K.
+  const std::string shape = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 4)); });
+  EXPECT_NE(shape.find("roi_heads.box_predictor.bbox_pred.weight"), std::string::npos) << shape;
 }
 
 TEST(Detectron2Errors, TinyInputRefused) {
-  det::Detectron2FasterRcnn m(synthetic(2));
+  det::Detectron2FasterRcnn m(synthetic());
   EXPECT_NE(error_of([&] { m.plan(20, 640); }).find("smaller than the minimum"), std::string::npos);
   EXPECT_NE(error_of([&] { std::uint8_t px[3] = {}; m.forward(px); }).find("before plan"), std::string::npos);
+}
+
+}  // namespace
+
+namespace {
+
+// An older checkpoint's pixel_mean / pixel_std replace the configured normalisation.
+TEST(Detectron2Errors, CheckpointPixelStatisticsAreUsed) {
+  const weights::SafeTensors base = synthetic();
+  weights::Writer w;
+  for (const std::string& name : base.names()) w.add(name, base.info(name).dtype, base.info(name).shape, base.raw(name));
+  const float mean[3] = {1, 2, 3}, std[3] = {2, 4, 8};
+  w.add_f32("pixel_mean", {3, 1, 1}, mean);
+  w.add_f32("pixel_std", {3, 1, 1}, std);
+  det::Detectron2FasterRcnnConfig cfg;
+  cfg.transform.min_size = cfg.transform.max_size = 64;  // a small, quick forward
+  det::Detectron2FasterRcnn m(weights::SafeTensors::from_bytes(w.bytes(), "old.safetensors"), cfg);
+  m.plan(40, 40);
+  std::vector<std::uint8_t> rgb(40 * 40 * 3);
+  for (std::size_t i = 0; i < rgb.size(); i += 3) rgb[i] = 10, rgb[i + 1] = 20, rgb[i + 2] = 30;
+  m.forward(rgb.data());
+  const float* px = m.transformed().data;  // B, G, R of pixel (0, 0)
+  EXPECT_EQ(px[0], (30.0f - 1.0f) / 2.0f);
+  EXPECT_EQ(px[1], (20.0f - 2.0f) / 4.0f);
+  EXPECT_EQ(px[2], (10.0f - 3.0f) / 8.0f);
+  // A wrong shape is refused by name.
+  weights::Writer bad;
+  for (const std::string& name : base.names())
+    bad.add(name, base.info(name).dtype, base.info(name).shape, base.raw(name));
+  bad.add_f32("pixel_mean", {3}, mean);
+  const std::string msg =
+      error_of([&] { det::Detectron2FasterRcnn b(weights::SafeTensors::from_bytes(bad.bytes(), "bad.safetensors")); });
+  EXPECT_NE(msg.find("pixel_mean"), std::string::npos) << msg;
 }
 
 }  // namespace

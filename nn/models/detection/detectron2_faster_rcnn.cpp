@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "nn/error.h"
-#include "nn/models/detection/pyramid_plan.h"
+#include "nn/models/detection/detector_stages.h"
 #include "nn/models/detection/resnet.h"
 
 namespace nn::detection {
@@ -16,12 +16,33 @@ constexpr WeightLayout kLayout = WeightLayout::Detectron2;
 
 // The specs must hold before any part reads a tensor; a file with extra tensors is
 // another architecture (a torchvision detector's names, say).
+// pixel_mean / pixel_std: buffers that older detectron2 versions saved with the model
+// ([3, 1, 1], B, G, R); v0.6 keeps them out of the checkpoint (non-persistent).
+const char* const kPixelStats[2] = {"pixel_mean", "pixel_std"};
+
 const weights::SafeTensors& checked(const weights::SafeTensors& st, std::vector<weights::TensorSpec>* specs) {
-  *specs = detectron2_faster_rcnn_tensor_specs(RoiHeads::classes_in(st, kRoi));
-  for (const std::string& name : weights::check_tensors(st, *specs))
+  const int classes = RoiHeads::classes_in(st, kRoi);
+  if (classes < 2)
+    throw weights::Error(st.source() + ": tensor '" + kRoi + "box_predictor.cls_score.weight' has 1 row, expected " +
+                         "K + 1 >= 2 (K classes, then the background)");
+  *specs = detectron2_faster_rcnn_tensor_specs(classes);
+  std::vector<weights::TensorSpec> all = *specs;
+  for (const char* name : kPixelStats)
+    if (st.has(name)) all.push_back({name, {3, 1, 1}}), specs->push_back(all.back());
+  for (const std::string& name : weights::check_tensors(st, all))
     throw weights::Error(st.source() + ": unexpected tensor '" + name + "' for " + kDetectron2FasterRcnnName +
                          " (weights of another architecture?)");
   return st;
+}
+
+// The configuration with the checkpoint's pixel statistics, where it has them.
+Detectron2FasterRcnnConfig with_pixel_stats(const weights::SafeTensors& st, Detectron2FasterRcnnConfig cfg) {
+  for (int k = 0; k < 2; ++k) {
+    if (!st.has(kPixelStats[k])) continue;
+    const std::vector<float> v = st.f32(kPixelStats[k]);
+    for (int c = 0; c < 3 && c < static_cast<int>(v.size()); ++c) (k ? cfg.transform.std : cfg.transform.mean)[c] = v[c];
+  }
+  return cfg;
 }
 
 }  // namespace
@@ -36,7 +57,7 @@ std::vector<weights::TensorSpec> detectron2_faster_rcnn_tensor_specs(int classes
 }
 
 Detectron2FasterRcnn::Detectron2FasterRcnn(const weights::SafeTensors& st, const Detectron2FasterRcnnConfig& cfg)
-    : cfg_(cfg),
+    : cfg_(with_pixel_stats(st, cfg)),
       backbone_(std::make_unique<ResNet50Backbone>(checked(st, &specs_), kBody, cfg.bn_eps, kLayout)),
       fpn_(st, kFpn, backbone_->out_channels(), kLayout),
       rpn_(st, kRpn, cfg.rpn),
@@ -48,10 +69,7 @@ void Detectron2FasterRcnn::set_dump(DumpSink* sink) {
 }
 
 void Detectron2FasterRcnn::attach_dump(DumpSink* sink) {
-  backbone_->set_dump(sink);
-  fpn_.set_dump(sink);
-  rpn_.set_dump(sink);
-  roi_heads_.set_dump(sink);
+  detection::attach_dump(*backbone_, fpn_, rpn_, roi_heads_, sink);
 }
 
 void Detectron2FasterRcnn::plan(int h, int w) {
@@ -65,19 +83,15 @@ void Detectron2FasterRcnn::plan(int h, int w) {
   std::vector<Shape> pooled(shapes.pyramid.begin(), shapes.pyramid.end() - 1);  // p6 feeds only the RPN
   roi_heads_.plan(pooled, sizes_, cfg_.rpn.post_nms_top_n, &layer_profiler_);
   pooled_.reserve(shapes.pyramid.size());
-  const std::size_t rois = static_cast<std::size_t>(std::max(cfg_.rpn.post_nms_top_n, 0));
-  proposals_.boxes.reserve(rois);
-  proposals_.scores.reserve(rois);
-  const std::size_t kept = static_cast<std::size_t>(std::max(cfg_.roi_heads.detections_per_img, 0));
-  detections_.boxes.reserve(kept);
-  detections_.scores.reserve(kept);
-  detections_.labels.reserve(kept);
+  reserve_results(cfg_.rpn.post_nms_top_n, cfg_.roi_heads.detections_per_img, &proposals_, &detections_);
   planned_h_ = h, planned_w_ = w;
-  body_names_.clear(), fpn_names_.clear();
-  for (std::size_t i = 0; i < shapes.features.size(); ++i) body_names_.push_back(kBody + "res" + std::to_string(i + 2));
-  for (std::size_t i = 0; i < shapes.pyramid.size(); ++i) fpn_names_.push_back(kFpn + "p" + std::to_string(i + 2));
-  for (auto& n : body_names_) n = "backbone.bottom_up[" + n.substr(kBody.size()) + "]";
-  for (auto& n : fpn_names_) n = "backbone[" + n.substr(kFpn.size()) + "]";
+  // The output dicts: bottom_up's res2..res5, the FPN's p2..p6.
+  dump_names_ = PyramidDumpNames();
+  for (std::size_t i = 0; i < shapes.features.size(); ++i)
+    dump_names_.body.push_back("backbone.bottom_up[res" + std::to_string(i + 2) + "]");
+  dump_names_.pyramid.resize(1);
+  for (std::size_t i = 0; i < shapes.pyramid.size(); ++i)
+    dump_names_.pyramid[0].push_back("backbone[p" + std::to_string(i + 2) + "]");
   attach_dump(dump_);
   profiler_.clear();
   prof_transform_ = profiler_.add("preprocess", "Pillow resize+BGR+normalise+pad", "", 0);
@@ -95,26 +109,9 @@ const Detections& Detectron2FasterRcnn::forward(const std::uint8_t* rgb) {
     transform_.run(rgb, cfg_.transform, input_.view());
   }
   if (dump_) dump_nhwc(dump_, "preprocess_image", input_.cview());
-  const std::vector<ConstTensorView>* feats;
-  const std::vector<ConstTensorView>* pyramid;
-  {
-    Profiler::Scope t(&profiler_, prof_backbone_);
-    feats = &backbone_->forward(input_.cview());
-  }
-  if (dump_)
-    for (std::size_t i = 0; i < feats->size(); ++i) dump_nhwc(dump_, body_names_[i], (*feats)[i]);
-  {
-    Profiler::Scope t(&profiler_, prof_fpn_);
-    pyramid = &fpn_.forward(*feats);
-  }
-  if (dump_)
-    for (std::size_t i = 0; i < pyramid->size(); ++i) dump_nhwc(dump_, fpn_names_[i], (*pyramid)[i]);
-  {
-    Profiler::Scope t(&profiler_, prof_rpn_);
-    const Proposals& p = rpn_.forward(*pyramid, sizes_);
-    proposals_.boxes.assign(p.boxes.begin(), p.boxes.end());
-    proposals_.scores.assign(p.scores.begin(), p.scores.end());
-  }
+  const std::vector<ConstTensorView>* pyramid =
+      &run_pyramid(*backbone_, fpn_, input_.cview(), profiler_, prof_backbone_, prof_fpn_, dump_, dump_names_);
+  run_rpn(rpn_, *pyramid, sizes_, profiler_, prof_rpn_, &proposals_);
   const Detections* det;
   {
     Profiler::Scope t(&profiler_, prof_roi_);

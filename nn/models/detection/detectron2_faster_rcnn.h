@@ -4,7 +4,9 @@
 // Pillow resize, BGR, normalise, pad -> ResNet-50 (STRIDE_IN_1X1, FrozenBN eps 1e-5)
 // + FPN -> RPN -> ROIAlignV2 box head -> boxes clipped to the original image.
 // Weights: the checkpoint's "model" entry under its own names (weights/export.py);
-// K foreground classes, read from cls_score (K + 1 rows, the background last).
+// K foreground classes, read from cls_score (K + 1 rows, the background last);
+// pixel_mean / pixel_std [3, 1, 1] where an older checkpoint saved them (they replace
+// the configured ones), else MODEL.PIXEL_MEAN / PIXEL_STD's defaults.
 // The parts are the torchvision detector's, configured (WeightLayout::Detectron2,
 // detectron2_rpn_config(), detectron2_roi_heads_config()).
 #pragma once
@@ -14,6 +16,7 @@
 #include <vector>
 
 #include "nn/models/detection/backbone.h"
+#include "nn/models/detection/detector_stages.h"
 #include "nn/models/detection/detectron2_transform.h"
 #include "nn/models/detection/fpn.h"
 #include "nn/models/detection/roi_heads.h"
@@ -66,7 +69,7 @@ class Detectron2FasterRcnn {
  private:
   void attach_dump(DumpSink* sink);
   DumpSink* dump_ = nullptr;
-  std::vector<std::string> body_names_, fpn_names_;
+  PyramidDumpNames dump_names_;
   Detectron2FasterRcnnConfig cfg_;
   std::vector<weights::TensorSpec> specs_;
   BackboneHolder backbone_;
