@@ -31,9 +31,12 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="Convert a PyTorch checkpoint (bare state_dict, {'model_state_dict': ...}, "
-        "{'state_dict': ...}, {'model': ...} or a pickled nn.Module) into safetensors for roadnn.",
+        "{'state_dict': ...}, {'model': ...} or a pickled nn.Module) into safetensors for roadnn. "
+        "detectron2's model_final.pth ({'model', 'trainer', 'iteration'}) and model zoo .pkl files "
+        "(plain pickles of numpy arrays) are {'model': ...} checkpoints.",
         epilog="Security: checkpoints are Python pickles and are loaded with "
-        "torch.load(weights_only=False), which can run arbitrary code. Only convert checkpoints "
+        "torch.load(weights_only=False) (or pickle.load for plain pickles), which can run arbitrary "
+        "code. Only convert checkpoints "
         "you trust. Output metadata always has format=%s and source=<checkpoint file name>."
         % FORMAT,
     )
