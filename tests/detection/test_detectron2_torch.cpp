@@ -149,30 +149,24 @@ TEST(Detectron2Errors, CheckpointHas295Tensors) {
   EXPECT_EQ(det::detectron2_faster_rcnn_tensor_specs(2)[0].name, "backbone.bottom_up.stem.conv1.weight");
 }
 
-TEST(Detectron2Errors, MissingTensorIsNamed) {
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("backbone.bottom_up.res3.0.conv1.norm.running_var")); });
+// One test (one process, one set of random weights): missing, extra and misshapen
+// tensors, a score layer without the background row, and inputs the model refuses.
+TEST(Detectron2Errors, WeightsAndInputProblemsAreNamed) {
+  std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("backbone.bottom_up.res3.0.conv1.norm.running_var")); });
   EXPECT_NE(msg.find("w.safetensors"), std::string::npos) << msg;
   EXPECT_NE(msg.find("backbone.bottom_up.res3.0.conv1.norm.running_var"), std::string::npos) << msg;
-}
-
-TEST(Detectron2Errors, ExtraTensorIsAnotherArchitecture) {
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "backbone.body.conv1.weight")); });
+  msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "backbone.body.conv1.weight")); });
   EXPECT_NE(msg.find("unexpected tensor 'backbone.body.conv1.weight'"), std::string::npos) << msg;
-}
-
-TEST(Detectron2Errors, ScoreRowsWithoutBackgroundRefused) {
   // One score row: no room for the background.
-  const std::string msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 1)); });
+  msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 1)); });
   EXPECT_NE(msg.find("cls_score"), std::string::npos) << msg;
   // K + 1 rows must match bbox_pred's 4K.
-  const std::string shape = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 4)); });
-  EXPECT_NE(shape.find("roi_heads.box_predictor.bbox_pred.weight"), std::string::npos) << shape;
-}
-
-TEST(Detectron2Errors, TinyInputRefused) {
+  msg = error_of([] { det::Detectron2FasterRcnn m(synthetic("", "", 4)); });
+  EXPECT_NE(msg.find("roi_heads.box_predictor.bbox_pred.weight"), std::string::npos) << msg;
   det::Detectron2FasterRcnn m(synthetic());
-  EXPECT_NE(error_of([&] { m.plan(20, 640); }).find("smaller than the minimum"), std::string::npos);
   EXPECT_NE(error_of([&] { std::uint8_t px[3] = {}; m.forward(px); }).find("before plan"), std::string::npos);
+  EXPECT_NE(error_of([&] { m.plan(20, 640); }).find("smaller than the minimum"), std::string::npos);
+  EXPECT_NE(error_of([&] { m.plan(640, 20001); }).find("larger than 20000"), std::string::npos);
 }
 
 }  // namespace
