@@ -86,14 +86,20 @@ DetectorBoxSource::DetectorBoxSource(const weights::SafeTensors& st, det::Faster
   }
 }
 
-std::vector<Candidate> DetectorBoxSource::candidates(const FrameContext& frame) {
-  const std::string where = frame.files ? frame.files->image : "frame " + std::to_string(frame.index);
-  if (!frame.image) throw Error(where + ": the detector needs the decoded image");
+const RgbImage& detector_frame_image(const FrameContext& frame, std::string* where) {
+  *where = frame.files ? frame.files->image : "frame " + std::to_string(frame.index);
+  if (!frame.image) throw Error(*where + ": the detector needs the decoded image");
   const RgbImage& img = *frame.image;
   if (img.width <= 0 || img.height <= 0 ||
       img.rgb.size() != static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height) * 3)
-    throw Error(where + ": image buffer does not hold " + std::to_string(img.width) + "x" +
+    throw Error(*where + ": image buffer does not hold " + std::to_string(img.width) + "x" +
                 std::to_string(img.height) + " RGB pixels");
+  return img;
+}
+
+std::vector<Candidate> DetectorBoxSource::candidates(const FrameContext& frame) {
+  std::string where;
+  const RgbImage& img = detector_frame_image(frame, &where);
   try {
     // Planning allocates every buffer for a size; a sequence normally has one.
     if (img.width != planned_w_ || img.height != planned_h_) {

@@ -36,6 +36,10 @@ std::vector<Candidate> detections_to_candidates(const nn::detection::Detections&
 // model receives). Reuses `out`'s storage.
 void rgb_to_chw01(const RgbImage& image, std::vector<float>* out);
 
+// The frame's decoded left image, checked for a detector (throws shle::Error naming
+// the image: no image, or a pixel buffer of the wrong size); *where names it.
+const RgbImage& detector_frame_image(const FrameContext& frame, std::string* where);
+
 class DetectorBoxSource : public BoxSource {
  public:
   // Errors name the weights file: a file that is not safetensors (weights::Error),

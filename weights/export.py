@@ -9,7 +9,10 @@ accepted as CHECKPOINT too, to add or change metadata of an exported file.
 Runs with /usr/bin/python3 using torch and the standard library only (no
 `safetensors` package). Accepted checkpoint forms: a bare state_dict,
 {"model_state_dict": ...}, {"state_dict": ...}, {"model": ...} and a pickled
-nn.Module. A DataParallel/DDP "module." prefix is stripped, BatchNorm
+nn.Module. A detectron2 checkpoint is {"model": ...} too: the trainer's
+model_final.pth ({"model", "trainer", "iteration"}, torch.save'd) and the model
+zoo's model_final_*.pkl (a plain pickle whose values are numpy arrays) both load.
+A DataParallel/DDP "module." prefix is stripped, BatchNorm
 num_batches_tracked counters are dropped, other non-float tensors are skipped
 with a warning, and float tensors are stored contiguous in the chosen dtype.
 """
@@ -50,9 +53,12 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="Convert a PyTorch checkpoint (bare state_dict, {'model_state_dict': ...}, "
-        "{'state_dict': ...}, {'model': ...} or a pickled nn.Module) into safetensors for roadnn.",
+        "{'state_dict': ...}, {'model': ...} or a pickled nn.Module) into safetensors for roadnn. "
+        "detectron2's model_final.pth ({'model', 'trainer', 'iteration'}) and model zoo .pkl files "
+        "(plain pickles of numpy arrays) are {'model': ...} checkpoints.",
         epilog="Security: checkpoints are Python pickles and are loaded with "
-        "torch.load(weights_only=False), which can run arbitrary code. Only convert checkpoints "
+        "torch.load(weights_only=False) (or pickle.load for plain pickles), which can run arbitrary "
+        "code. Only convert checkpoints "
         "you trust. Output metadata always has format=%s and source=<checkpoint file name>."
         % FORMAT,
     )
@@ -115,6 +121,14 @@ def first_line(exc):
     return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
+def load_plain_pickle(path):
+    """detectron2's model zoo .pkl files: a plain pickle (latin1 for Caffe2-era ones)."""
+    import pickle
+
+    with open(path, "rb") as f:
+        return pickle.load(f, encoding="latin1")
+
+
 def load_checkpoint(torch, path):
     if not os.path.exists(path):
         raise ExportError(f"{path}: no such file")
@@ -128,17 +142,27 @@ def load_checkpoint(torch, path):
                 raise
             return torch.load(path, map_location="cpu")  # torch < 1.13
     except Exception as e:  # torch/pickle raise many unrelated types for bad files
+        # torch.load reads a plain pickle's first object as its magic number.
+        if "magic number" in str(e):
+            try:
+                return load_plain_pickle(path)
+            except Exception:
+                pass
         hint = ""
         if isinstance(e, AttributeError) and "Can't get attribute" in str(e):
             hint = "; a pickled nn.Module needs its class importable, save its state_dict() instead"
         raise ExportError(f"{path}: cannot load checkpoint ({first_line(e)}){hint}") from e
 
 
+def is_array(torch, v):
+    """A tensor, or a numpy array (detectron2's pickled checkpoints)."""
+    return isinstance(v, torch.Tensor) or type(v).__module__ == "numpy" and type(v).__name__ == "ndarray"
+
+
 def is_state_dict(torch, obj):
     from collections.abc import Mapping
 
-    return isinstance(obj, Mapping) and len(obj) > 0 and all(
-        isinstance(v, torch.Tensor) for v in obj.values())
+    return isinstance(obj, Mapping) and len(obj) > 0 and all(is_array(torch, v) for v in obj.values())
 
 
 def find_state_dict(torch, obj, path):
@@ -179,6 +203,11 @@ def select_tensors(torch, state, dtype, path):
     skipped = []
     for name in names:
         value = state[name]
+        if is_array(torch, value) and not isinstance(value, torch.Tensor):
+            try:
+                value = torch.as_tensor(value)
+            except Exception as e:
+                raise ExportError(f"{path}: array '{name}': cannot convert ({first_line(e)})") from e
         out_name = name[len("module."):] if strip else name
         if out_name == "num_batches_tracked" or out_name.endswith(".num_batches_tracked"):
             continue

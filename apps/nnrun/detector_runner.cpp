@@ -5,6 +5,7 @@
 
 #include <cstdio>
 
+#include "apps/nnrun/detection_outputs.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "weights/tensor_spec.h"
 
@@ -62,23 +63,9 @@ class DetectorRunner : public Runner {
   bool enable_proposal_dump() override { return dump_proposals_ = true; }
 
   void write_outputs(weights::Writer& out) const override {
-    const std::int64_t k = static_cast<std::int64_t>(det_.boxes.size());
-    std::vector<float> boxes;
-    for (const auto& b : det_.boxes) boxes.insert(boxes.end(), {b.x1, b.y1, b.x2, b.y2});
-    out.add_f32("boxes", {k, 4}, boxes.data());
-    out.add_f32("scores", {k}, det_.scores.data());
-    out.add_i64("labels", {k}, det_.labels.data());
-    if (!dump_proposals_) return;
+    write_detections(out, det_, "labels");
     // As torchvision's model.rpn returns them: the transformed (resized) image's pixels.
-    const auto& p = model_.proposals();
-    const std::int64_t n = static_cast<std::int64_t>(p.boxes.size());
-    std::vector<float> flat;
-    for (const auto& b : p.boxes) flat.insert(flat.end(), {b.x1, b.y1, b.x2, b.y2});
-    out.add_f32("proposals", {n, 4}, flat.data());
-    out.add_f32("proposal_scores", {n}, p.scores.data());
-    const auto& s = model_.sizes();
-    const std::int64_t hw[2] = {s.resized_h, s.resized_w};
-    out.add_i64("proposal_image_size", {2}, hw);
+    if (dump_proposals_) write_proposals(out, model_.proposals(), "proposal_scores", model_.sizes());
   }
 
   nn::Profiler* profiler() override { return &model_.profiler(); }

@@ -14,6 +14,7 @@
 
 #include "apps/common/cli.h"
 #include "apps/common/exec_env.h"
+#include "apps/common/image_io.h"
 #include "apps/common/output_files.h"
 #include "apps/common/precision_option.h"
 #include "apps/common/unused_tensors.h"
@@ -48,6 +49,11 @@ const std::vector<ModelInfo>& models() {
       {"fasterrcnn_mobilenet_v3_large_320_fpn", "the same at 320/640 px (torchvision's low-resolution defaults)",
        make_detector, false, nullptr},
       {"fasterrcnn_resnet50_fpn", "torchvision Faster R-CNN, ResNet-50 FPN (v1): same input and outputs", make_detector, false, nullptr},
+      {"detectron2_faster_rcnn_r50_fpn",
+       "detectron2's Faster R-CNN R50-FPN (SHLE's model_final.pth via weights/export.py): --image FILE or input\n"
+       "                            'input' U8 [H,W,3] RGB -> boxes [K,4] (original pixels), scores [K], classes [K] I64\n"
+       "                            (0-based)",
+       make_detectron2, false, nullptr},
   };
   return list;
 }
@@ -77,7 +83,7 @@ double peak_rss_mb() {
 
 int main(int argc, char** argv) {
   apps::apply_exec_environment("nnrun");
-  std::string model, weights_path, input_path, output_path, isa_name, precision_name, conv3x3;
+  std::string model, weights_path, input_path, image_path, output_path, isa_name, precision_name, conv3x3;
   std::string dump_path, dump_filter, format = "table", profile_out;
   int threads = 0, repeat = 0;
   bool profile = false, quiet = false, dump_proposals = false;
@@ -90,6 +96,8 @@ int main(int argc, char** argv) {
   args.option("model", "NAME", "model to run (see the list below)", &model);
   args.option("weights", "FILE", "weights as safetensors, PyTorch state_dict names", &weights_path);
   args.option("input", "FILE", "input tensors as safetensors (e.g. 'input' [N,3,H,W] F32)", &input_path);
+  args.option("image", "FILE", "instead of --input: an image file (PNG, JPEG, BMP) for the models that take one\n"
+              "                            (detectron2_faster_rcnn_r50_fpn)", &image_path);
   args.option("output", "FILE", "where to write the output tensors (safetensors)", &output_path);
   args.option("threads", "N", "threads (default: all cores)", &threads);
   args.option("repeat", "R", "run the forward pass R more times; print peak_rss_mb= and, last,\n"
@@ -115,12 +123,14 @@ int main(int argc, char** argv) {
             "                            in the pixels of the resized image 'proposal_image_size' [2] = H,W)",
             &dump_proposals);
   args.flag("quiet", "print only errors and the timing line", &quiet);
-  for (const char* r : {"model", "weights", "input", "output"}) args.required(r);
+  for (const char* r : {"model", "weights", "output"}) args.required(r);
   args.epilog(model_list +
               "\nexample:\n  nnrun --model convnext_tiny --weights convnext_tiny.safetensors \\\n"
               "        --input x.safetensors --output y.safetensors --threads 2 --repeat 5\n"
               "  nnrun --model convnext_tiny ... --dump d.safetensors --dump-filter '^features\\.[0-9]+$'\n"
-              "  nnrun --model convnext_tiny ... --profile --repeat 10 --format json --profile-out t.json");
+              "  nnrun --model convnext_tiny ... --profile --repeat 10 --format json --profile-out t.json\n"
+              "  nnrun --model detectron2_faster_rcnn_r50_fpn --weights model_final.safetensors \\\n"
+              "        --image frame.png --output d.safetensors --dump-proposals");
   args.parse(argc, argv);
 
   const nnrun::ModelInfo* info = nullptr;
@@ -128,8 +138,9 @@ int main(int argc, char** argv) {
     if (model == m.name) info = &m;
   if (!info) args.fail("unknown model '" + model + "'");
   if (repeat < 0) args.fail("--repeat must be >= 0");
-  for (const std::string* p : {&weights_path, &input_path, &output_path})
-    if (p->empty()) args.fail("--weights, --input and --output must not be empty");
+  if (input_path.empty() == image_path.empty()) args.fail("give one of --input FILE and --image FILE");
+  for (const std::string* p : {&weights_path, &output_path})
+    if (p->empty()) args.fail("--weights and --output must not be empty");
   if (format != "table" && format != "json" && format != "csv") args.fail("--format must be table, json or csv");
   if (format != "table" && !profile) args.fail("--format " + format + " needs --profile");
   if (!profile_out.empty() && format == "table") args.fail("--profile-out needs --profile --format json or csv");
@@ -164,7 +175,7 @@ int main(int argc, char** argv) {
     // Before anything is read or written: the output must not replace an input.
     outputs::Plan plan;
     plan.input(weights_path, "weights");
-    plan.input(input_path, "input");
+    plan.input(image_path.empty() ? input_path : image_path, image_path.empty() ? "input" : "image");
     plan.output(output_path);
     if (dump) plan.output(dump_path);
     if (!profile_out.empty()) plan.output(profile_out);
@@ -186,7 +197,11 @@ int main(int argc, char** argv) {
     }
     if (dump_proposals && !runner->enable_proposal_dump())
       args.fail("--dump-proposals: model '" + model + "' has no region proposals (detectors only)");
-    {
+    if (!image_path.empty()) {
+      if (!runner->takes_image()) args.fail("--image: model '" + model + "' takes --input tensors, not an image");
+      const imageio::Image img = imageio::load(image_path, 3);
+      runner->prepare_rgb8(img.u8.data(), img.height, img.width, image_path);
+    } else {
       weights::SafeTensors x = weights::SafeTensors::load(input_path);
       runner->prepare(x);
     }

@@ -28,6 +28,13 @@ class Runner {
   // Checks the input file's tensors (throws with "<file>: ..." on a problem) and
   // plans the activation memory for them.
   virtual void prepare(const weights::SafeTensors& inputs) = 0;
+  // Models taking an RGB8 image (--image FILE) plan for it here; `source` names the
+  // file in messages.
+  virtual bool takes_image() const { return false; }
+  virtual void prepare_rgb8(const std::uint8_t* rgb, int h, int w, const std::string& source) {
+    (void)rgb, (void)h, (void)w;
+    throw weights::Error(source + ": this model takes an input tensor file, not an image");
+  }
   virtual void forward() = 0;
   // Adds the outputs of the last forward, in PyTorch's layout.
   virtual void write_outputs(weights::Writer& out) const = 0;

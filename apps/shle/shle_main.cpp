@@ -18,6 +18,7 @@
 #include "nn/threads.h"
 #include "shle/box_source.h"
 #include "shle/detector_box_source.h"
+#include "shle/detectron2_box_source.h"
 #include "shle/error.h"
 #include "shle/pipeline.h"
 #include "shle/released_box_source.h"
@@ -35,7 +36,7 @@ void progress_bar(std::size_t done, std::size_t total) {
 }
 
 // "1,2" -> {1, 2}: positive integers below 100000, nothing else. Empty on error.
-std::vector<int> parse_labels(const std::string& text) {
+std::vector<int> parse_labels(const std::string& text, int lowest = 1) {
   std::vector<int> out;
   std::size_t pos = 0;
   while (pos <= text.size()) {
@@ -43,7 +44,7 @@ std::vector<int> parse_labels(const std::string& text) {
     std::string part = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) return {};
     const int v = std::stoi(part);
-    if (v < 1) return {};
+    if (v < lowest) return {};
     out.push_back(v);
     if (comma == std::string::npos) break;
     pos = comma + 1;
@@ -97,8 +98,9 @@ int main(int argc, char** argv) {
   p.option("detector-weights", "W", "torchvision Faster R-CNN state_dict as .safetensors (--boxes detector)",
            &det_weights);
   p.option("detector-model", "NAME",
-           "fasterrcnn_mobilenet_v3_large_fpn (default), fasterrcnn_mobilenet_v3_large_320_fpn or "
-           "fasterrcnn_resnet50_fpn",
+           "fasterrcnn_mobilenet_v3_large_fpn (default), fasterrcnn_mobilenet_v3_large_320_fpn, "
+           "fasterrcnn_resnet50_fpn or detectron2_faster_rcnn_r50_fpn (the released stage 1's model_final.pth, "
+           "converted by weights/export.py; its labels are 0-based)",
            &det_model);
   p.option("detector-score", "S", "detections with score > S are candidates (default 0.3)", &det_score);
   p.option("detector-labels", "L,..", "labels that are height-limit devices (default: every label but 0)",
@@ -193,17 +195,20 @@ int main(int argc, char** argv) {
 
   const bool detector = boxes == "detector";
   nn::detection::FasterRcnnVariant det_variant{};
+  const bool detectron2 = detector && det_model == nn::detection::kDetectron2FasterRcnnName;
   shle::DetectorOptions det_opt;
   if (detector) {
     if (det_weights.empty()) p.fail("--boxes detector needs --detector-weights W.safetensors");
-    if (!nn::detection::parse_faster_rcnn(det_model, &det_variant))
-      p.fail("--detector-model must be fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn "
-             "or fasterrcnn_resnet50_fpn");
+    if (!detectron2 && !nn::detection::parse_faster_rcnn(det_model, &det_variant))
+      p.fail("--detector-model must be fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn, "
+             "fasterrcnn_resnet50_fpn or detectron2_faster_rcnn_r50_fpn");
     if (!(det_score >= 0 && det_score < 1)) p.fail("--detector-score must be in [0, 1)");
     det_opt.score_threshold = det_score;
     if (p.given("detector-labels")) {
-      det_opt.labels = parse_labels(det_labels);
-      if (det_opt.labels.empty()) p.fail("--detector-labels takes labels >= 1 separated by commas, e.g. 1,2");
+      det_opt.labels = parse_labels(det_labels, detectron2 ? 0 : 1);
+      if (det_opt.labels.empty())
+        p.fail(detectron2 ? "--detector-labels takes detectron2's 0-based classes separated by commas, e.g. 0"
+                          : "--detector-labels takes labels >= 1 separated by commas, e.g. 1,2");
     }
   } else {
     for (const char* o : {"detector-weights", "detector-model", "detector-score", "detector-labels"})
@@ -278,6 +283,12 @@ int main(int argc, char** argv) {
         source = std::make_unique<shle::CocoResultsSource>(box_paths.front(), coco_images, seq, sizes);
     } else if (boxes == "annotations") {
       source = std::make_unique<shle::AnnotationBoxSource>();
+    } else if (detectron2) {
+      auto d = std::make_unique<shle::Detectron2BoxSource>(det_weights, det_opt);
+      det_desc = {det_model, det_weights, d->num_classes(), d->labels(), det_score};
+      std::fprintf(stderr, "shle: detector %s, %d classes (score > %g), weights %s\n", det_model.c_str(),
+                   d->num_classes(), det_score, det_weights.c_str());
+      source = std::move(d);
     } else if (detector) {
       auto d = std::make_unique<shle::DetectorBoxSource>(det_weights, det_variant, det_opt);
       det_desc = {nn::detection::faster_rcnn_name(det_variant), det_weights, d->num_classes(), d->labels(), det_score};

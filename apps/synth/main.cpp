@@ -15,6 +15,7 @@
 #include "apps/common/exec_env.h"
 #include "apps/common/output_files.h"
 #include "nn/models/convnext.h"
+#include "nn/models/detection/detectron2_faster_rcnn.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/stixel_head.h"
 #include "nn/models/synthetic_weights.h"
@@ -27,6 +28,9 @@ std::vector<weights::TensorSpec> model_specs(const std::string& model, nn::Stixe
   nn::detection::FasterRcnnVariant detector;
   if (nn::detection::parse_faster_rcnn(model, &detector))
     return nn::detection::faster_rcnn_tensor_specs(detector, classes);
+  // detectron2 counts foreground classes (NUM_CLASSES); cls_score has one more row.
+  if (model == nn::detection::kDetectron2FasterRcnnName)
+    return nn::detection::detectron2_faster_rcnn_tensor_specs(classes + 1);
   if (model == "stixelnext") {
     auto specs = nn::convnext_tensor_specs(nn::convnext_tiny_config(), "features.");
     for (auto& s : nn::stixel_head_tensor_specs(head, 768, "classifier.")) specs.push_back(s);
@@ -107,12 +111,14 @@ int main(int argc, char** argv) {
                    "tests and benchmarks.");
   args.option("model", "NAME",
               "weights for convnext_tiny, convnext_small, convnext_base, stixelnext, "
-              "fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn or fasterrcnn_resnet50_fpn",
+              "fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn, fasterrcnn_resnet50_fpn\n"
+              "                            or detectron2_faster_rcnn_r50_fpn (under its checkpoint's names)",
               &model);
   args.option("head", "V", "stixelnext head variant v0..v4 (default v4)", &head);
   args.option("input-size", "HxW", "stixelnext: the network input size written to the metadata "
               "(stixelnext.input_height/_width; default: none, i.e. 1280x1920)", &input_size);
-  args.option("classes", "N", "Faster R-CNN classes, background included (default 2: one device class)",
+  args.option("classes", "N", "Faster R-CNN classes: torchvision's with the background (default 2: one device\n"
+              "                            class); detectron2's foreground only, its NUM_CLASSES (default 1)",
               &classes);
   args.option("image", "WxH", "a synthetic road-scene PNG of this size instead", &image_size);
   args.option("shape", "N,C,H,W", "an input tensor 'input' of this shape instead", &shape_text);
@@ -123,6 +129,7 @@ int main(int argc, char** argv) {
   args.epilog("examples:\n  synth --model convnext_tiny --out w.safetensors\n"
               "  synth --model stixelnext --head v4 --out stixelnext.safetensors\n"
               "  synth --model fasterrcnn_mobilenet_v3_large_320_fpn --classes 2 --out det.safetensors\n"
+              "  synth --model detectron2_faster_rcnn_r50_fpn --classes 1 --out d2.safetensors\n"
               "  synth --image 1920x1280 --out road.png\n"
               "  synth --shape 1,3,1280,1920 --range 0,255 --out x.safetensors");
   args.parse(argc, argv);
@@ -131,7 +138,9 @@ int main(int argc, char** argv) {
   nn::StixelHeadVariant variant;
   if (!nn::parse_stixel_head(head, &variant)) args.fail("--head must be one of v0..v4");
   nn::detection::FasterRcnnVariant detector;
-  const bool is_detector = nn::detection::parse_faster_rcnn(model, &detector);
+  const bool is_detectron2 = model == nn::detection::kDetectron2FasterRcnnName;
+  const bool is_detector = nn::detection::parse_faster_rcnn(model, &detector) || is_detectron2;
+  if (is_detectron2 && !args.given("classes")) classes = 1;
   int in_h = 0, in_w = 0;
   if (!input_size.empty()) {
     if (model != "stixelnext") args.fail("--input-size applies to --model stixelnext only");
@@ -139,7 +148,7 @@ int main(int argc, char** argv) {
         in_w > 16384)
       args.fail("--input-size takes HxW with both in [32, 16384], e.g. 320x480");
   }
-  if (args.given("classes") && !is_detector) args.fail("--classes applies to the fasterrcnn_* models only");
+  if (args.given("classes") && !is_detector) args.fail("--classes applies to the detectors only");
   if (classes < 1 || classes > 10000) args.fail("--classes must be in 1..10000 (background included)");
 
   if (out.empty()) args.fail("--out must not be empty");

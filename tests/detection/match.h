@@ -3,11 +3,13 @@
 #pragma once
 
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "nn/models/detection/box_ops.h"
+#include "nn/models/detection/roi_heads.h"
 
 namespace dettest {
 
@@ -99,6 +101,12 @@ inline std::string unexplained_misses(const MatchResult& r, const std::vector<Bo
           << "] score " << s;
   }
   return out.str();
+}
+
+// Bitwise the same detections (boxes, scores, labels), e.g. for two thread counts.
+inline bool identical(const nn::detection::Detections& a, const nn::detection::Detections& b) {
+  return a.boxes.size() == b.boxes.size() && a.scores == b.scores && a.labels == b.labels &&
+         (a.boxes.empty() || std::memcmp(a.boxes.data(), b.boxes.data(), a.boxes.size() * sizeof(Box)) == 0);
 }
 
 }  // namespace dettest

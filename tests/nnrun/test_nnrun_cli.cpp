@@ -18,6 +18,8 @@
 #include "nn/gemm_bf16.h"
 #include "nn/layout.h"
 #include "nn/models/convnext.h"
+#include "apps/common/image_io.h"
+#include "nn/models/detection/detectron2_faster_rcnn.h"
 #include "nn/models/detection/faster_rcnn.h"
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
@@ -482,3 +484,56 @@ TEST_F(NnrunCli, OutputThatIsAnInputIsRefused) {
   }
   EXPECT_TRUE(std::filesystem::is_symlink(path("link.safetensors")));
 }
+
+// detectron2's detector takes an RGB8 image: --image FILE and an input file's U8
+// [H, W, 3] tensor give the same outputs (boxes, scores, 0-based classes, proposals
+// with their logits); other input forms are one clear error.
+namespace {
+
+TEST_F(NnrunCli, Detectron2TakesAnImageOrAnRgb8Tensor) {
+  namespace det = nn::detection;
+  write("d2.safetensors", nn::synthetic_weights(det::detectron2_faster_rcnn_tensor_specs(2), 4).bytes());
+  const int h = 60, w = 90;
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(h) * w * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>((i * 2654435761u) >> 13);
+  write("img.png", imageio::encode_png(rgb.data(), w, h, 3));
+  weights::Writer in;
+  in.add("input", weights::DType::U8, {h, w, 3}, rgb.data());
+  in.write(path("rgb.safetensors"));
+
+  const std::string model = det::kDetectron2FasterRcnnName;
+  Result r = run("d2.safetensors", "rgb.safetensors", "--dump-proposals", model);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto from_tensor = weights::SafeTensors::load(path("y.safetensors"));
+  ASSERT_TRUE(from_tensor.has("classes") && from_tensor.has("proposal_logits"));
+  EXPECT_FALSE(from_tensor.has("labels"));
+  const auto& kshape = from_tensor.info("boxes").shape;
+  ASSERT_EQ(kshape.size(), 2u);
+  EXPECT_EQ(from_tensor.info("classes").shape, (std::vector<std::int64_t>{kshape[0]}));
+  for (auto c : from_tensor.i64("classes")) EXPECT_TRUE(c == 0 || c == 1) << c;
+
+  const std::string cmd = std::string(NNRUN_PATH) + " --model " + model + " --weights " + path("d2.safetensors") +
+                          " --image " + path("img.png") + " --output " + path("z.safetensors") +
+                          " --dump-proposals --quiet 2>" + path("stderr");
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const auto from_image = weights::SafeTensors::load(path("z.safetensors"));
+  for (const char* name : {"boxes", "scores", "proposals", "proposal_logits"})
+    EXPECT_EQ(from_image.f32(name), from_tensor.f32(name)) << name;
+  EXPECT_EQ(from_image.i64("classes"), from_tensor.i64("classes"));
+  std::remove(path("y.safetensors").c_str());
+
+  // A float [1,3,H,W] tensor (the torchvision detectors' input) is refused by name.
+  write_input("f.safetensors", {1, 3, h, w});
+  r = run("d2.safetensors", "f.safetensors", "", model);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("expected U8 [H, W, 3]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(path("f.safetensors")), std::string::npos) << r.err;
+  EXPECT_FALSE(output_exists());
+  // --image for a model without image input, and --input with --image, are usage errors.
+  r = run("w.safetensors", "x.safetensors", "--image " + path("img.png"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("one of --input FILE and --image FILE"), std::string::npos) << r.err;
+  EXPECT_FALSE(output_exists());
+}
+
+}  // namespace

@@ -226,6 +226,27 @@ TEST(ShleApp, DetectorBoxes) {
   EXPECT_EQ(d->get("score_threshold")->number(), 0);
 }
 
+// detectron2's model by name: labels are 0-based (0 parses), and weights of another
+// architecture stop the run naming the file and the first tensor it lacks.
+TEST(ShleApp, Detectron2DetectorModel) {
+  TempDir dir;
+  const std::string out = dir / "o";
+  const std::string cmd = std::string(SHLE_APP) + " --sequence '" + sequence() + "' --calib '" + sequence() +
+                          "/calib.json' --boxes detector --detector-model detectron2_faster_rcnn_r50_fpn "
+                          "--detector-labels 0 --detector-weights '" + detector_weights() + "' --out-dir '" + out +
+                          "' --quiet";
+  Result r = run(cmd, dir);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find(detector_weights() + ": missing tensor 'backbone.bottom_up.stem.conv1.weight'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(no_outputs(out));
+  r = run(cmd + " --detector-labels x", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("detectron2's 0-based classes"), std::string::npos) << r.err;
+}
+
 TEST(ShleApp, DetectorErrors) {
   TempDir dir;
   const std::string app = SHLE_APP, seq = sequence(), out = dir / "o";

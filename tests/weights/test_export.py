@@ -244,6 +244,41 @@ def main():
                  out=os.path.join(work, "no_dir", "x.safetensors"))
     check(not os.path.exists(os.path.join(work, "no_dir")), "unwritable: directory created")
 
+    # detectron2: the trainer's model_final.pth ({"model", "trainer", "iteration"}; the
+    # trainer entry holds no tensors the state dict needs) and the model zoo's .pkl, a
+    # plain pickle of numpy arrays.
+    trainer = {"model": state, "trainer": {"iteration": 89999, "hooks": {"LRScheduler": {
+        "base_lrs": [0.02], "last_epoch": 90000}}, "_trainer": {"optimizer": optimizer.state_dict()}},
+        "iteration": 89999}
+    tensors, _, r = export_ok("d2_trainer", trainer)
+    same_as_model("d2_trainer", tensors)
+    check("from 'model'" in r.stdout, f"d2_trainer: form in {r.stdout!r}")
+    import pickle
+    pkl = os.path.join(work, "d2_zoo.pkl")
+    with open(pkl, "wb") as f:
+        pickle.dump({"model": {k: v.numpy() for k, v in state.items()}, "__author__": "Detectron2 Model Zoo",
+                     "matching_heuristics": True}, f)
+    r = run_export(pkl, os.path.join(work, "d2_zoo.safetensors"), separate_process=True)
+    check(r.returncode == 0, f"d2_zoo: exit {r.returncode}, stderr {r.stderr.strip()!r}")
+    if r.returncode == 0:
+        zoo, _ = safetensors_io.load(os.path.join(work, "d2_zoo.safetensors"))
+        same_as_model("d2_zoo", zoo)
+        # num_batches_tracked (an int64 array) is dropped as for tensors
+        check("warning" not in r.stderr, f"d2_zoo: unexpected warning {r.stderr!r}")
+    # A pickle that is neither a checkpoint nor loadable says so on one line.
+    bad_pkl = os.path.join(work, "d2_truncated.pkl")
+    with open(pkl, "rb") as f, open(bad_pkl, "wb") as g:
+        g.write(f.read()[:200])
+    export_fails("d2_truncated", bad_pkl, "d2_truncated.pkl: cannot load checkpoint")
+    nan_pkl = os.path.join(work, "d2_nan.pkl")
+    with open(nan_pkl, "wb") as f:
+        pickle.dump({"model": {"w": np.array([1.0, np.nan], dtype=np.float32)}}, f)
+    export_fails("d2_nan", nan_pkl, "'w' contains NaN or Inf")
+    obj_pkl = os.path.join(work, "d2_objects.pkl")
+    with open(obj_pkl, "wb") as f:
+        pickle.dump({"model": {"w": np.array(["a", "b"], dtype=object)}}, f)
+    export_fails("d2_objects", obj_pkl, "array 'w': cannot convert")
+
     # A pickled module whose class cannot be imported is an error, not a crash.
     custom = os.path.join(work, "custom.pt")
     script = ("import sys, torch\n"

@@ -19,8 +19,24 @@ std::vector<Box> cell_anchors(const std::vector<float>& sizes, const std::vector
   return out;
 }
 
+std::vector<Box> cell_anchors_unrounded(const std::vector<float>& sizes, const std::vector<float>& ratios) {
+  std::vector<Box> out;
+  for (float s : sizes)
+    for (float r : ratios) {
+      const double area = static_cast<double>(s) * s;
+      const double w = std::sqrt(area / r), h = r * w;
+      out.push_back({static_cast<float>(-w / 2.0), static_cast<float>(-h / 2.0), static_cast<float>(w / 2.0),
+                     static_cast<float>(h / 2.0)});
+    }
+  return out;
+}
+
 std::vector<Box> grid_anchors(const std::vector<Box>& cell, int grid_h, int grid_w, int padded_h, int padded_w) {
-  const int stride_h = padded_h / grid_h, stride_w = padded_w / grid_w;
+  return grid_anchors_strided(cell, grid_h, grid_w, padded_h / grid_h, padded_w / grid_w);
+}
+
+std::vector<Box> grid_anchors_strided(const std::vector<Box>& cell, int grid_h, int grid_w, int stride_h,
+                                      int stride_w) {
   std::vector<Box> out;
   out.reserve(static_cast<std::size_t>(grid_h) * grid_w * cell.size());
   for (int y = 0; y < grid_h; ++y)

@@ -2,6 +2,7 @@
 
 #include "nn/error.h"
 #include "nn/models/detection/mobilenet_v3.h"
+#include "nn/models/detection/detector_stages.h"
 #include "nn/models/detection/resnet.h"
 
 namespace nn::detection {
@@ -98,12 +99,7 @@ void FasterRcnn::set_dump(DumpSink* sink) {
   attach_dump(sink);
 }
 
-void FasterRcnn::attach_dump(DumpSink* sink) {
-  backbone_->set_dump(sink);
-  fpn_.set_dump(sink);
-  rpn_.set_dump(sink);
-  roi_heads_.set_dump(sink);
-}
+void FasterRcnn::attach_dump(DumpSink* sink) { detection::attach_dump(*backbone_, fpn_, rpn_, roi_heads_, sink); }
 
 void FasterRcnn::plan(int h, int w) {
   attach_dump(nullptr);  // the dry run below is no forward of the user's input
@@ -112,36 +108,25 @@ void FasterRcnn::plan(int h, int w) {
   normalised_.resize({1, h, w, 3});
   resized_.resize({1, sizes_.resized_h, sizes_.resized_w, 3});
   layer_profiler_.clear();
-  backbone_->plan(sizes_.padded_h, sizes_.padded_w, &layer_profiler_);
-  // Shapes follow from a dry run of the size rules of each part.
-  std::vector<ConstTensorView> feats = backbone_->forward(input_.cview());
-  std::vector<Shape> fs;
-  for (auto& f : feats) fs.push_back(f.shape);
-  fpn_.plan(fs);
-  std::vector<ConstTensorView> pyramid = fpn_.forward(feats);
-  std::vector<Shape> ps;
-  for (auto& p : pyramid) ps.push_back(p.shape);
+  const PyramidShapes shapes = plan_pyramid(*backbone_, fpn_, input_.cview(), &layer_profiler_);
+  std::vector<Shape> ps = shapes.pyramid;
   rpn_.plan(ps, sizes_);
   ps.pop_back();  // 'pool' feeds only the RPN
   roi_heads_.plan(ps, sizes_, cfg_.rpn.post_nms_top_n, &layer_profiler_);
-  pooled_.reserve(pyramid.size());
-  const std::size_t rois = static_cast<std::size_t>(std::max(cfg_.rpn.post_nms_top_n, 0));
-  proposals_.boxes.reserve(rois);
-  proposals_.scores.reserve(rois);
-  const std::size_t kept = static_cast<std::size_t>(std::max(cfg_.roi_heads.detections_per_img, 0));
-  detections_.boxes.reserve(kept);
-  detections_.scores.reserve(kept);
-  detections_.labels.reserve(kept);
+  pooled_.reserve(ps.size() + 1);
+  reserve_results(cfg_.rpn.post_nms_top_n, cfg_.roi_heads.detections_per_img, &proposals_, &detections_);
   planned_h_ = h, planned_w_ = w;
   // Output names: IntermediateLayerGetter's dict '0'.., the FPN's '0'.., 'pool'.
   transform_name_ = "transform[0]";
   proposals_name_ = "rpn[0][0]";
-  body_names_.clear(), fpn_names_.clear(), backbone_names_.clear();
-  for (std::size_t i = 0; i < feats.size(); ++i) body_names_.push_back("backbone.body[" + std::to_string(i) + "]");
-  for (std::size_t i = 0; i < pyramid.size(); ++i) {
-    const std::string key = i + 1 < pyramid.size() ? std::to_string(i) : "pool";
-    fpn_names_.push_back("backbone.fpn[" + key + "]");
-    backbone_names_.push_back("backbone[" + key + "]");
+  dump_names_ = PyramidDumpNames();
+  for (std::size_t i = 0; i < shapes.features.size(); ++i)
+    dump_names_.body.push_back("backbone.body[" + std::to_string(i) + "]");
+  dump_names_.pyramid.resize(2);  // the FPN's dict, returned again as the backbone's
+  for (std::size_t i = 0; i < shapes.pyramid.size(); ++i) {
+    const std::string key = i + 1 < shapes.pyramid.size() ? std::to_string(i) : "pool";
+    dump_names_.pyramid[0].push_back("backbone.fpn[" + key + "]");
+    dump_names_.pyramid[1].push_back("backbone[" + key + "]");
   }
   attach_dump(dump_);
   profiler_.clear();
@@ -159,28 +144,9 @@ const Detections& FasterRcnn::forward(const float* image) {
     transform_image(image, sizes_, cfg_.transform, normalised_.data.data(), resized_.data.data(), input_.view());
   }
   if (dump_) dump_nhwc(dump_, transform_name_, input_.cview());
-  const std::vector<ConstTensorView>* feats;
-  const std::vector<ConstTensorView>* pyramid;
-  {
-    Profiler::Scope t(&profiler_, prof_backbone_);
-    feats = &backbone_->forward(input_.cview());
-  }
-  if (dump_)
-    for (std::size_t i = 0; i < feats->size(); ++i) dump_nhwc(dump_, body_names_[i], (*feats)[i]);
-  {
-    Profiler::Scope t(&profiler_, prof_fpn_);
-    pyramid = &fpn_.forward(*feats);
-  }
-  if (dump_) {
-    for (std::size_t i = 0; i < pyramid->size(); ++i) dump_nhwc(dump_, fpn_names_[i], (*pyramid)[i]);
-    for (std::size_t i = 0; i < pyramid->size(); ++i) dump_nhwc(dump_, backbone_names_[i], (*pyramid)[i]);
-  }
-  {
-    Profiler::Scope t(&profiler_, prof_rpn_);
-    const Proposals& p = rpn_.forward(*pyramid, sizes_);
-    proposals_.boxes.assign(p.boxes.begin(), p.boxes.end());
-    proposals_.scores.assign(p.scores.begin(), p.scores.end());
-  }
+  const std::vector<ConstTensorView>* pyramid =
+      &run_pyramid(*backbone_, fpn_, input_.cview(), profiler_, prof_backbone_, prof_fpn_, dump_, dump_names_);
+  run_rpn(rpn_, *pyramid, sizes_, profiler_, prof_rpn_, &proposals_);
   if (dump_ && dump_->wants(proposals_name_)) {
     const int n = static_cast<int>(proposals_.boxes.size());
     float* flat = dump_->scratch(4 * static_cast<std::size_t>(n));

@@ -10,6 +10,7 @@
 
 #include "nn/models/detection/fpn.h"
 #include "nn/models/detection/backbone.h"
+#include "nn/models/detection/detector_stages.h"
 #include "nn/models/detection/roi_heads.h"
 #include "nn/models/detection/rpn.h"
 #include "nn/models/detection/transform.h"
@@ -73,7 +74,7 @@ class FasterRcnn {
   void attach_dump(DumpSink* sink);
   DumpSink* dump_ = nullptr;
   std::string transform_name_, proposals_name_;
-  std::vector<std::string> body_names_, fpn_names_, backbone_names_;
+  PyramidDumpNames dump_names_;
   FasterRcnnConfig cfg_;
   std::vector<weights::TensorSpec> specs_;
   BackboneHolder backbone_;

@@ -14,32 +14,48 @@ Conv2dParams params(int cin, int k) {
   return p;
 }
 
-std::string inner_name(const std::string& prefix, std::size_t i) {
-  return prefix + "inner_blocks." + std::to_string(i) + ".0.";
+// The module of level i's lateral (inner) or output (layer) conv; torchvision's
+// Conv2dNormActivation wraps the conv as ".0", whose weights carry the ".0".
+std::string inner_module(const std::string& prefix, std::size_t i, WeightLayout layout) {
+  return layout == WeightLayout::Detectron2 ? prefix + "fpn_lateral" + std::to_string(i + 2)
+                                         : prefix + "inner_blocks." + std::to_string(i);
 }
-std::string layer_name(const std::string& prefix, std::size_t i) {
-  return prefix + "layer_blocks." + std::to_string(i) + ".0.";
+std::string layer_module(const std::string& prefix, std::size_t i, WeightLayout layout) {
+  return layout == WeightLayout::Detectron2 ? prefix + "fpn_output" + std::to_string(i + 2)
+                                         : prefix + "layer_blocks." + std::to_string(i);
+}
+std::string conv_of(const std::string& module, WeightLayout layout) {
+  return layout == WeightLayout::Detectron2 ? module : module + ".0";
+}
+std::string inner_name(const std::string& prefix, std::size_t i, WeightLayout layout) {
+  return conv_of(inner_module(prefix, i, layout), layout) + ".";
+}
+std::string layer_name(const std::string& prefix, std::size_t i, WeightLayout layout) {
+  return conv_of(layer_module(prefix, i, layout), layout) + ".";
 }
 
 }  // namespace
 
-std::vector<weights::TensorSpec> Fpn::tensor_specs(const std::string& prefix, const std::vector<int>& in) {
+std::vector<weights::TensorSpec> Fpn::tensor_specs(const std::string& prefix, const std::vector<int>& in,
+                                                  WeightLayout layout) {
   std::vector<weights::TensorSpec> s;
   for (std::size_t i = 0; i < in.size(); ++i) {
-    s.push_back({inner_name(prefix, i) + "weight", {kChannels, in[i], 1, 1}});
-    s.push_back({inner_name(prefix, i) + "bias", {kChannels}});
-    s.push_back({layer_name(prefix, i) + "weight", {kChannels, kChannels, 3, 3}});
-    s.push_back({layer_name(prefix, i) + "bias", {kChannels}});
+    s.push_back({inner_name(prefix, i, layout) + "weight", {kChannels, in[i], 1, 1}});
+    s.push_back({inner_name(prefix, i, layout) + "bias", {kChannels}});
+    s.push_back({layer_name(prefix, i, layout) + "weight", {kChannels, kChannels, 3, 3}});
+    s.push_back({layer_name(prefix, i, layout) + "bias", {kChannels}});
   }
   return s;
 }
 
-Fpn::Fpn(const weights::SafeTensors& st, const std::string& prefix, const std::vector<int>& in) {
+Fpn::Fpn(const weights::SafeTensors& st, const std::string& prefix, const std::vector<int>& in, WeightLayout layout) {
   for (std::size_t i = 0; i < in.size(); ++i) {
-    inner_.push_back(load_conv(st, inner_name(prefix, i), params(in[i], 1)));
-    layer_.push_back(load_conv(st, layer_name(prefix, i), params(kChannels, 3)));
-    inner_names_.push_back(inner_name(prefix, i));
-    layer_names_.push_back(layer_name(prefix, i));
+    inner_.push_back(load_conv(st, inner_name(prefix, i, layout), params(in[i], 1)));
+    layer_.push_back(load_conv(st, layer_name(prefix, i, layout), params(kChannels, 3)));
+    inner_names_.push_back(inner_module(prefix, i, layout));
+    inner_covers_.push_back(conv_of(inner_names_.back(), layout));
+    layer_names_.push_back(layer_module(prefix, i, layout));
+    layer_covers_.push_back(conv_of(layer_names_.back(), layout));
   }
 }
 
@@ -63,15 +79,9 @@ void Fpn::plan(const std::vector<Shape>& inputs) {
   result_.reserve(inputs.size() + 1);
 }
 
-// inner_name()/layer_name() end in "."; Conv2dNormActivation wraps each conv as ".0".
 void Fpn::dump_level(std::size_t i, bool lateral_is_module) const {
-  auto strip = [](const std::string& n) { return n.substr(0, n.size() - 1); };
-  if (lateral_is_module) {
-    const std::string inner = strip(inner_names_[i]);
-    dump_nhwc(dump_, inner.substr(0, inner.size() - 2), inner_out_[i].cview(), inner);
-  }
-  const std::string layer = strip(layer_names_[i]);
-  dump_nhwc(dump_, layer.substr(0, layer.size() - 2), out_[i].cview(), layer);
+  if (lateral_is_module) dump_nhwc(dump_, inner_names_[i], inner_out_[i].cview(), inner_covers_[i]);
+  dump_nhwc(dump_, layer_names_[i], out_[i].cview(), layer_covers_[i]);
 }
 
 const std::vector<ConstTensorView>& Fpn::forward(const std::vector<ConstTensorView>& x) {

@@ -19,6 +19,10 @@ namespace nn::detection {
 
 using Dims = std::vector<std::int64_t>;
 
+// Whose module names (and, where they differ, whose layer choices) a detector part
+// follows: torchvision's state_dict or detectron2's checkpoint.
+enum class WeightLayout { Torchvision, Detectron2 };
+
 // An owned NHWC activation sized at plan time.
 struct Activation {
   AlignedBuffer data;

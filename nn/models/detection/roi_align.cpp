@@ -41,7 +41,14 @@ RoiSample sample_at(float y, float x, int height, int width) {
 
 void roi_bin_scalar(const RoiBin& b) { roi_bin_with<float>(b); }
 
-void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const RoiAlignParams& p, float* out) {
+std::size_t roi_align_max_samples(const RoiAlignParams& p, float max_roi_h, float max_roi_w) {
+  if (p.sampling_ratio > 0) return static_cast<std::size_t>(p.sampling_ratio) * p.sampling_ratio;
+  const double gh = std::ceil(std::max(max_roi_h, 1.0f) / p.out_h) + 1, gw = std::ceil(std::max(max_roi_w, 1.0f) / p.out_w) + 1;
+  return static_cast<std::size_t>(gh * gw);
+}
+
+void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const RoiAlignParams& p, float* out,
+                   RoiSample* room, std::size_t sample_room) {
   const int height = feature.shape.h, width = feature.shape.w, channels = feature.shape.c;
   const float* base = feature.pixel(n, 0, 0);
   const float offset = p.aligned ? 0.5f : 0.0f;
@@ -59,15 +66,16 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   const int grid_w = p.sampling_ratio > 0 ? p.sampling_ratio : static_cast<int>(std::ceil(roi_w / p.out_w));
   const float count = static_cast<float>(std::max(grid_h * grid_w, 1));
   const std::size_t sample_count = static_cast<std::size_t>(grid_h) * grid_w;
-  // The models' fixed 2 x 2 grid fits on the stack; only adaptive sampling of large
-  // RoIs needs the heap.
+  // The fixed 2 x 2 grid fits on the stack; adaptive sampling uses the caller's
+  // planned room, the heap only for a one-off call without it.
   void (*bin_kernel)(const RoiBin&) = roi_bin_scalar;
   if (p.isa == Isa::Avx512) bin_kernel = roi_bin_avx512;
   else if (p.isa == Isa::Avx2) bin_kernel = roi_bin_avx2;
   RoiSample on_stack[16];
   std::vector<RoiSample> on_heap;
   RoiSample* samples = on_stack;
-  if (sample_count > 16) on_heap.resize(sample_count), samples = on_heap.data();
+  if (room && sample_count <= sample_room) samples = room;
+  else if (sample_count > 16) on_heap.resize(sample_count), samples = on_heap.data();
   RoiBin bin;
   bin.samples = samples;
   bin.count_samples = static_cast<int>(sample_count);

@@ -2,6 +2,9 @@
 // aligned=False, level mapper over the pooled maps), TwoMLPHead, FastRCNNPredictor
 // and postprocess_detections (softmax, class-wise decode with weights (10,10,5,5),
 // clip, score > thresh, small-box removal, per-class NMS, top detections).
+// detectron2's StandardROIHeads (ROIPooler with ROIAlignV2, FastRCNNConvFCHead,
+// FastRCNNOutputLayers, fast_rcnn_inference) is the same maths with the choices in
+// RoiHeadsConfig below.
 #pragma once
 
 #include <cstdint>
@@ -13,6 +16,7 @@
 #include "nn/models/detection/box_ops.h"
 #include "nn/dump.h"
 #include "nn/models/detection/layers.h"
+#include "nn/models/detection/roi_align_kernel.h"
 #include "nn/models/detection/transform.h"
 
 namespace nn::detection {
@@ -23,7 +27,22 @@ struct RoiHeadsConfig {
   int detections_per_img = 100;
   float min_size = 1e-2f;
   int num_classes = 0;  // 0: as the weights hold; more than they hold is an error
+  // Pooling: torchvision's MultiScaleRoIAlign (aligned=false, 2x2 samples) or
+  // detectron2's ROIAlignV2 (aligned=true, sampling_ratio 0: adaptive).
+  bool aligned = false;
+  int sampling_ratio = 2;
+  // Level rule floor(4 + log2(sqrt(area) / 224 + level_eps_in_log) + level_eps),
+  // clamped: torchvision adds 1e-6 after the log, detectron2 1e-8 inside it.
+  float level_eps_in_log = 0.0f, level_eps = 1e-6f;
+  // detectron2: the background is the LAST score column, bbox_pred holds boxes of the
+  // foreground classes only, and labels are 0-based foreground classes.
+  bool background_last = false;
+  bool drop_non_finite = false;  // drop proposals with a non-finite score or box
+  WeightLayout layout = WeightLayout::Torchvision;  // detectron2: box_head.fc1/fc2
 };
+
+// detectron2's ROI heads at inference (Base-RCNN-FPN, faster_rcnn_R_50_FPN_3x).
+RoiHeadsConfig detectron2_roi_heads_config();
 
 struct Detections {
   std::vector<Box> boxes;  // resized-image pixels until rescaled
@@ -37,7 +56,8 @@ class RoiHeads {
   RoiHeads(const weights::SafeTensors& st, const std::string& prefix, const RoiHeadsConfig& cfg);
   // Number of classes (background included) the predictor holds.
   static int classes_in(const weights::SafeTensors& st, const std::string& prefix);
-  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, int classes, int hidden = 1024);
+  static std::vector<weights::TensorSpec> tensor_specs(const std::string& prefix, int classes, int hidden = 1024,
+                                                       WeightLayout layout = WeightLayout::Torchvision);
   int num_classes() const { return classes_; }
 
   // pooled: the maps the RoI pooler may sample (torchvision's '0'..'3' present). Rows
@@ -58,11 +78,15 @@ class RoiHeads {
   std::string prefix_, pool_name_, head_name_, head_covers_, cls_name_, box_name_, pred0_name_, pred1_name_;
   RoiHeadsConfig cfg_;
   int classes_ = 0, hidden_ = 1024;
+  int box_classes_ = 0;  // classes with box deltas: all, or all but detectron2's background
   GemmWeights fc6_, fc7_, predictor_;
   AlignedBuffer fc6_bias_, fc7_bias_, predictor_bias_;
   std::vector<float> scales_;
   int k_min_ = 0, k_max_ = 0;
   AlignedBuffer features_, h6_, h7_, logits_;
+  // One bin's RoIAlign samples per thread (adaptive sampling), planned.
+  std::vector<RoiSample> samples_;
+  std::size_t sample_room_ = 0;
   // Post-processing scratch, sized at plan time.
   std::vector<Box> boxes_;
   std::vector<float> scores_, prob_;

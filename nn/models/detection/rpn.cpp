@@ -8,10 +8,38 @@
 
 namespace nn::detection {
 
-std::vector<weights::TensorSpec> Rpn::tensor_specs(const std::string& p, int a) {
-  return {{p + "conv.0.0.weight", {256, 256, 3, 3}}, {p + "conv.0.0.bias", {256}},
-          {p + "cls_logits.weight", {a, 256, 1, 1}}, {p + "cls_logits.bias", {a}},
-          {p + "bbox_pred.weight", {4 * a, 256, 1, 1}}, {p + "bbox_pred.bias", {4 * a}}};
+namespace {
+
+// The head's shared conv, objectness and delta layers under each layout's names.
+struct HeadNames {
+  std::string conv, cls, box;
+};
+HeadNames head_names(WeightLayout layout) {
+  if (layout == WeightLayout::Detectron2) return {"conv.", "objectness_logits.", "anchor_deltas."};
+  return {"conv.0.0.", "cls_logits.", "bbox_pred."};
+}
+
+}  // namespace
+
+RpnConfig detectron2_rpn_config() {
+  RpnConfig c;
+  c.anchor_sizes = {{32}, {64}, {128}, {256}, {512}};
+  c.strides = {4, 8, 16, 32, 64};
+  c.round_anchors = false;
+  c.sigmoid_scores = false;
+  c.score_thresh = -INFINITY;
+  c.drop_non_finite = true;
+  c.min_size = 0.0f;
+  c.min_size_exclusive = true;
+  c.layout = WeightLayout::Detectron2;
+  return c;
+}
+
+std::vector<weights::TensorSpec> Rpn::tensor_specs(const std::string& p, int a, WeightLayout layout) {
+  const HeadNames n = head_names(layout);
+  return {{p + n.conv + "weight", {256, 256, 3, 3}}, {p + n.conv + "bias", {256}},
+          {p + n.cls + "weight", {a, 256, 1, 1}}, {p + n.cls + "bias", {a}},
+          {p + n.box + "weight", {4 * a, 256, 1, 1}}, {p + n.box + "bias", {4 * a}}};
 }
 
 Rpn::Rpn(const weights::SafeTensors& st, const std::string& p, const RpnConfig& cfg) : cfg_(cfg), prefix_(p) {
@@ -19,9 +47,10 @@ Rpn::Rpn(const weights::SafeTensors& st, const std::string& p, const RpnConfig& 
   a_ = static_cast<int>(cfg.anchor_sizes[0].size() * cfg.aspect_ratios.size());
   Conv2dParams cp;
   cp.cin = cp.cout = 256, cp.kh = cp.kw = 3, cp.pad_h = cp.pad_w = 1;
-  conv_ = load_conv(st, p + "conv.0.0.", cp);
-  std::vector<float> w = st.f32(p + "cls_logits.weight"), b = st.f32(p + "cls_logits.bias");
-  const auto bw = st.f32(p + "bbox_pred.weight"), bb = st.f32(p + "bbox_pred.bias");
+  const HeadNames n = head_names(cfg.layout);
+  conv_ = load_conv(st, p + n.conv, cp);
+  std::vector<float> w = st.f32(p + n.cls + "weight"), b = st.f32(p + n.cls + "bias");
+  const auto bw = st.f32(p + n.box + "weight"), bb = st.f32(p + n.box + "bias");
   w.insert(w.end(), bw.begin(), bw.end());
   b.insert(b.end(), bb.begin(), bb.end());
   heads_ = GemmWeights::pack(w.data(), 5 * a_, 256);
@@ -43,17 +72,27 @@ void Rpn::plan(const std::vector<Shape>& levels, const ImageSizes& sizes) {
     // The head runs once per level: call k of a module is "name#k" (k > 0).
     const std::string call = l ? "#" + std::to_string(l) : "";
     const std::string head = prefix_.substr(0, prefix_.size() - 1), k = std::to_string(l);
+    const HeadNames n = head_names(cfg_.layout);
+    const bool d2 = cfg_.layout == WeightLayout::Detectron2;  // its conv module applies the ReLU itself
     names_.push_back({prefix_ + "conv" + call,
-                      module_list(prefix_, {"conv.0" + call, "conv.0.0" + call, "conv.0.1" + call}),
-                      prefix_ + "cls_logits" + call, prefix_ + "bbox_pred" + call, head + "[0][" + k + "]",
+                      d2 ? prefix_ + "conv" + call
+                         : module_list(prefix_, {"conv.0" + call, "conv.0.0" + call, "conv.0.1" + call}),
+                      prefix_ + n.cls.substr(0, n.cls.size() - 1) + call,
+                      prefix_ + n.box.substr(0, n.box.size() - 1) + call, head + "[0][" + k + "]",
                       head + "[1][" + k + "]"});
     const Shape& s = levels[l];
     hidden_[l].resize({1, s.h, s.w, 256});
     head_out_[l].resize({1, s.h, s.w, 5 * a_});
     scratch_.require(conv_, s.w);
-    const auto cell = cell_anchors(cfg_.anchor_sizes[l], cfg_.aspect_ratios);
+    const auto cell = cfg_.round_anchors ? cell_anchors(cfg_.anchor_sizes[l], cfg_.aspect_ratios)
+                                         : cell_anchors_unrounded(cfg_.anchor_sizes[l], cfg_.aspect_ratios);
     if (static_cast<int>(cell.size()) != a_) throw Error("RPN: every level needs the same number of anchors");
-    anchors_.push_back(grid_anchors(cell, s.h, s.w, sizes.padded_h, sizes.padded_w));
+    if (!cfg_.strides.empty() && cfg_.strides.size() != levels.size())
+      throw Error("RPN: " + std::to_string(levels.size()) + " feature maps but strides for " +
+                  std::to_string(cfg_.strides.size()));
+    anchors_.push_back(cfg_.strides.empty()
+                           ? grid_anchors(cell, s.h, s.w, sizes.padded_h, sizes.padded_w)
+                           : grid_anchors_strided(cell, s.h, s.w, cfg_.strides[l], cfg_.strides[l]));
     const std::size_t count = static_cast<std::size_t>(s.h) * s.w * a_;
     largest = std::max(largest, count);
     candidates += std::min<std::size_t>(count, static_cast<std::size_t>(std::max(cfg_.pre_nms_top_n, 0)));
@@ -105,9 +144,15 @@ const Proposals& Rpn::forward(const std::vector<ConstTensorView>& levels, const 
   }
   kept_boxes_.clear(), kept_scores_.clear(), kept_levels_.clear();
   for (std::size_t i = 0; i < boxes_.size(); ++i) {
-    const float score = 1.0f / (1.0f + std::exp(-logits_[i]));
-    const Box b = clip_box(boxes_[i], sizes.resized_h, sizes.resized_w);
-    if (!box_big_enough(b, cfg_.min_size)) continue;
+    const Box& raw = boxes_[i];
+    if (cfg_.drop_non_finite && !(std::isfinite(raw.x1) && std::isfinite(raw.y1) && std::isfinite(raw.x2) &&
+                                  std::isfinite(raw.y2) && std::isfinite(logits_[i])))
+      continue;
+    const float score = cfg_.sigmoid_scores ? 1.0f / (1.0f + std::exp(-logits_[i])) : logits_[i];
+    const Box b = clip_box(raw, sizes.resized_h, sizes.resized_w);
+    if (cfg_.min_size_exclusive ? !(b.x2 - b.x1 > cfg_.min_size && b.y2 - b.y1 > cfg_.min_size)
+                                : !box_big_enough(b, cfg_.min_size))
+      continue;
     if (!(score >= cfg_.score_thresh)) continue;
     kept_boxes_.push_back(b);
     kept_scores_.push_back(score);
