@@ -83,9 +83,12 @@ DatasetEval evaluate_dataset(const std::string& root, const DatasetEvalOptions& 
     }
   }
   const shle::Calibration cal = shle::load_smartereye_calibration(d.adas_params);
-  if (opt.boxes != "annotations" && opt.boxes != "released-stage1" && opt.boxes != "coco-results")
-    throw shle::Error("box source must be annotations, released-stage1 or coco-results");
-  if (opt.boxes != "annotations" && opt.boxes_dir.empty()) throw shle::Error("--boxes " + opt.boxes + " needs --boxes-dir DIR");
+  if (opt.boxes != "annotations" && opt.boxes != "released-stage1" && opt.boxes != "coco-results" &&
+      opt.boxes != "detector")
+    throw shle::Error("box source must be annotations, released-stage1, coco-results or detector");
+  if (opt.boxes == "detector" && !opt.detector) throw shle::Error("--boxes detector needs a loaded detector");
+  if ((opt.boxes == "released-stage1" || opt.boxes == "coco-results") && opt.boxes_dir.empty())
+    throw shle::Error("--boxes " + opt.boxes + " needs --boxes-dir DIR");
   if (opt.boxes == "coco-results" && opt.coco_images_dir.empty())
     throw shle::Error("--boxes coco-results needs --coco-images-dir DIR (test2017_images_0XX.json) or 'sorted'");
   for (const auto& s : scenes) {
@@ -109,14 +112,15 @@ DatasetEval evaluate_dataset(const std::string& root, const DatasetEvalOptions& 
     } else if (opt.boxes == "released-stage1") {
       src = std::make_unique<shle::ReleasedStage1Source>((fs::path(opt.boxes_dir) / ("images_" + num)).string(), seq,
                                                          shle::sequence_image_sizes(seq, loader, cal));
-    } else {
+    } else if (opt.boxes == "coco-results") {
       const std::string results = (fs::path(opt.boxes_dir) / ("coco_instances_images" + num + "_results.json")).string();
       const std::string images = opt.coco_images_dir == "sorted"
                                      ? std::string("sorted")
                                      : (fs::path(opt.coco_images_dir) / ("test2017_images_" + num + ".json")).string();
       src = std::make_unique<shle::CocoResultsSource>(results, images, seq, shle::sequence_image_sizes(seq, loader, cal));
     }
-    e.run = shle::run_sequence(seq, cal, *src, loader, po);
+    // "detector": the caller's source, loaded once, for every scene.
+    e.run = shle::run_sequence(seq, cal, src ? *src : *opt.detector, loader, po);
     out.scenes.push_back(std::move(e));
   }
   return out;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "shle/box_source.h"
 #include "shle/disparity_height.h"
 #include "shle/pipeline.h"
 
@@ -19,7 +20,10 @@ struct DatasetEvalOptions {
   // the released tracking_<tracker>_json folder) or "coco-results"
   // (boxes_dir/coco_instances_images0XX_results.json, the names demo.sh gives, with
   // coco_images_dir/test2017_images_0XX.json or coco_images_dir == "sorted").
+  // "detector": `detector` (loaded once by the caller, e.g. from model_final.pth) finds
+  // the candidates on every left image of every scene.
   std::string boxes = "annotations", boxes_dir, coco_images_dir;
+  shle::BoxSource* detector = nullptr;
   std::vector<int> scenes;        // empty: every scene
   std::map<int, double> gt;       // scene id -> truth (m)
   shle::PipelineOptions pipeline; // has_gt_height / gt_height set per scene

@@ -17,6 +17,7 @@
 #include "apps/common/exec_env.h"
 #include "apps/common/output_files.h"
 #include "apps/shle/dataset_eval.h"
+#include "apps/shle/detector_option.h"
 #include "shle/disparity_height.h"
 #include "apps/shle/frame_loader.h"
 #include "shle/box_source.h"
@@ -136,8 +137,11 @@ int main(int argc, char** argv) {
   p.option("boxes", "SRC",
            "dataset: annotations (default), released-stage1 (--boxes-dir holds images_0XX/ folders of "
            "[[x, y], [w, h]] files, the released tracking_mil_json) or coco-results (--boxes-dir holds "
-           "coco_instances_images0XX_results.json)",
+           "coco_instances_images0XX_results.json) or detector (a Faster R-CNN on every left image: --detector-model, "
+           "--detector-weights, e.g. the released model_final.pth converted by weights/export.py)",
            &dopt.boxes);
+  shleapp::DetectorChoice det;
+  shleapp::add_detector_options(p, &det, "dataset: ");
   p.option("boxes-dir", "DIR", "dataset: folder of the released-stage1 / coco-results box files", &dopt.boxes_dir);
   p.option("coco-images-dir", "DIR|sorted",
            "dataset, coco-results: folder of test2017_images_0XX.json (maps image_id to an image), or 'sorted'",
@@ -161,7 +165,9 @@ int main(int argc, char** argv) {
       "  shle_eval --benchmark /tmp/shle_bm\n"
       "  shle_eval --dataset disparity-height data/demo_data --csv table.csv\n"
       "  shle_eval --dataset disparity-height data/demo_data --boxes released-stage1 \\\n"
-      "            --boxes-dir Stage1/faster_rcnn_output/tracking_mil_json --gate-with-annotations --kalman-compat");
+      "            --boxes-dir Stage1/faster_rcnn_output/tracking_mil_json --gate-with-annotations --kalman-compat\n"
+      "  shle_eval --dataset disparity-height data/demo_data --boxes detector --box-rule widest \\\n"
+      "            --detector-model detectron2_faster_rcnn_r50_fpn --detector-weights model_final.safetensors");
   p.parse(argc, argv);
   if (p.given("dataset") == p.given("benchmark")) p.fail("give exactly one of --benchmark DIR or --dataset KIND ROOT");
   if (p.given("dataset")) {
@@ -169,6 +175,7 @@ int main(int argc, char** argv) {
     if (positional.size() != 1) p.fail("--dataset disparity-height takes the dataset ROOT after it");
     if (!p.given("box-rule") && dopt.boxes == "coco-results") dopt.box_rule = "widest";
     if (!p.given("tracker") && dopt.boxes == "released-stage1") dopt.tracker = "none";
+    shleapp::check_detector_options(p, dopt.boxes == "detector", &det);
     dopt.pipeline.gate_with_annotations = gate;
     dopt.pipeline.temporal.kalman_compat = compat;
     dopt.pipeline.temporal.use_kalman = !no_kalman;
@@ -189,10 +196,17 @@ int main(int argc, char** argv) {
       shle::make_tracker(dopt.tracker, {}, {});
       outputs::Plan plan;
       if (p.given("gt-heights")) plan.input(gt_file, "truth table");
+      if (dopt.boxes == "detector") plan.input(det.weights, "detector weights");
       if (!csv_path.empty()) plan.output(csv_path);
       if (!json_path.empty()) plan.output(json_path);
       plan.check();
       outputs::install_interrupt_cleanup();
+      std::unique_ptr<shle::BoxSource> detector;
+      if (dopt.boxes == "detector") {
+        shleapp::DetectorDescription described;
+        detector = shleapp::make_detector_source(det, "shle_eval", quiet, &described);
+        dopt.detector = detector.get();
+      }
       shleapp::DatasetEval ev = shleapp::evaluate_dataset(positional.front(), dopt, [&](const shle::DisparityHeightScene& s) {
         if (!quiet) std::fprintf(stderr, "shle_eval: %s\n", s.name.c_str());
       });
@@ -213,7 +227,8 @@ int main(int argc, char** argv) {
   }
   if (!positional.empty()) p.fail("unexpected argument '" + positional.front() + "'");
   for (const char* o : {"boxes", "boxes-dir", "coco-images-dir", "gt-heights", "gt-height", "scenes", "box-rule", "tracker",
-                        "gate-with-annotations", "kalman-compat", "no-kalman", "csv", "json", "quiet"})
+                        "gate-with-annotations", "kalman-compat", "no-kalman", "csv", "json", "quiet", "detector-weights",
+                        "detector-model", "detector-score", "detector-labels", "threads"})
     if (p.given(o)) p.fail(std::string("--") + o + " applies to --dataset, not to --benchmark");
   try {
     std::vector<BenchScene> scenes = read_listing(root);

@@ -12,6 +12,7 @@
 #include "apps/common/exec_env.h"
 #include "apps/common/image_io.h"
 #include "apps/common/output_files.h"
+#include "apps/shle/detector_option.h"
 #include "apps/shle/frame_loader.h"
 #include "apps/shle/height_plot.h"
 #include "apps/shle/report.h"
@@ -35,33 +36,15 @@ void progress_bar(std::size_t done, std::size_t total) {
   std::fflush(stderr);
 }
 
-// "1,2" -> {1, 2}: positive integers below 100000, nothing else. Empty on error.
-std::vector<int> parse_labels(const std::string& text, int lowest = 1) {
-  std::vector<int> out;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    std::size_t comma = text.find(',', pos);
-    std::string part = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) return {};
-    const int v = std::stoi(part);
-    if (v < lowest) return {};
-    out.push_back(v);
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   apps::apply_exec_environment("shle");
   std::string sequence, calib, calib_format = "plain", boxes = "annotations", rule = "paper", box_test = "whole";
   std::string tracker = "ncc", out_dir = "shle_out", max_pixels;
-  std::string det_weights, det_model = "fasterrcnn_mobilenet_v3_large_fpn", det_labels, coco_images;
+  std::string coco_images;
   std::vector<std::string> box_paths;
-  double det_score = 0.3;
-  int threads = 0;
+  shleapp::DetectorChoice det;
   double gt_height = 0, bf = 0;
   bool filter_single = false, no_kde = false, no_depth = false, no_kalman = false, compat = false, quiet = false;
   bool gate = false;
@@ -95,17 +78,7 @@ int main(int argc, char** argv) {
          "(IoU > 0, or right edge within 200 px of the annotation's left edge and top within 20 px). "
          "Uses the ground truth: for reproducing the released figures only",
          &gate);
-  p.option("detector-weights", "W", "torchvision Faster R-CNN state_dict as .safetensors (--boxes detector)",
-           &det_weights);
-  p.option("detector-model", "NAME",
-           "fasterrcnn_mobilenet_v3_large_fpn (default), fasterrcnn_mobilenet_v3_large_320_fpn, "
-           "fasterrcnn_resnet50_fpn or detectron2_faster_rcnn_r50_fpn (the released stage 1's model_final.pth, "
-           "converted by weights/export.py; its labels are 0-based)",
-           &det_model);
-  p.option("detector-score", "S", "detections with score > S are candidates (default 0.3)", &det_score);
-  p.option("detector-labels", "L,..", "labels that are height-limit devices (default: every label but 0)",
-           &det_labels);
-  p.option("threads", "N", "threads for the detector (default: all cores)", &threads);
+  shleapp::add_detector_options(p, &det);
   p.option("box-rule", "RULE",
            "paper (default: drop left, low, top-edge boxes, best score) or widest (released; the default with "
            "coco-results)",
@@ -194,30 +167,7 @@ int main(int argc, char** argv) {
     p.fail("Kalman variances must be finite, q >= 0, r > 0, p0 >= 0");
 
   const bool detector = boxes == "detector";
-  nn::detection::FasterRcnnVariant det_variant{};
-  const bool detectron2 = detector && det_model == nn::detection::kDetectron2FasterRcnnName;
-  shle::DetectorOptions det_opt;
-  if (detector) {
-    if (det_weights.empty()) p.fail("--boxes detector needs --detector-weights W.safetensors");
-    if (!detectron2 && !nn::detection::parse_faster_rcnn(det_model, &det_variant))
-      p.fail("--detector-model must be fasterrcnn_mobilenet_v3_large_fpn, fasterrcnn_mobilenet_v3_large_320_fpn, "
-             "fasterrcnn_resnet50_fpn or detectron2_faster_rcnn_r50_fpn");
-    if (!(det_score >= 0 && det_score < 1)) p.fail("--detector-score must be in [0, 1)");
-    det_opt.score_threshold = det_score;
-    if (p.given("detector-labels")) {
-      det_opt.labels = parse_labels(det_labels, detectron2 ? 0 : 1);
-      if (det_opt.labels.empty())
-        p.fail(detectron2 ? "--detector-labels takes detectron2's 0-based classes separated by commas, e.g. 0"
-                          : "--detector-labels takes labels >= 1 separated by commas, e.g. 1,2");
-    }
-  } else {
-    for (const char* o : {"detector-weights", "detector-model", "detector-score", "detector-labels"})
-      if (p.given(o)) p.fail(std::string("--") + o + " needs --boxes detector");
-  }
-  if (p.given("threads")) {
-    if (threads < 1 || threads > 1024) p.fail("--threads must be in 1..1024");
-    nn::set_num_threads(threads);
-  }
+  shleapp::check_detector_options(p, detector, &det);
 
   try {
     opt.box_rule.rule = shle::parse_box_rule(rule);
@@ -248,7 +198,7 @@ int main(int argc, char** argv) {
       if (released_stage1 && std::filesystem::is_directory(box_paths.front(), ec))
         for (const auto& e : std::filesystem::directory_iterator(box_paths.front(), ec))
           plan.input(e.path().string(), "released stage-1 box file");
-      if (detector) plan.input(det_weights, "detector weights");
+      if (detector) plan.input(det.weights, "detector weights");
       for (const shle::FrameFiles& f : seq.frames) {
         plan.input(f.image);
         plan.input(f.annotation);
@@ -283,21 +233,8 @@ int main(int argc, char** argv) {
         source = std::make_unique<shle::CocoResultsSource>(box_paths.front(), coco_images, seq, sizes);
     } else if (boxes == "annotations") {
       source = std::make_unique<shle::AnnotationBoxSource>();
-    } else if (detectron2) {
-      auto d = std::make_unique<shle::Detectron2BoxSource>(det_weights, det_opt);
-      det_desc = {det_model, det_weights, d->num_classes(), d->labels(), det_score};
-      std::fprintf(stderr, "shle: detector %s, %d classes (score > %g), weights %s\n", det_model.c_str(),
-                   d->num_classes(), det_score, det_weights.c_str());
-      source = std::move(d);
     } else if (detector) {
-      auto d = std::make_unique<shle::DetectorBoxSource>(det_weights, det_variant, det_opt);
-      det_desc = {nn::detection::faster_rcnn_name(det_variant), det_weights, d->num_classes(), d->labels(), det_score};
-      std::string labels;
-      for (int l : d->labels()) labels += (labels.empty() ? "" : ",") + std::to_string(l);
-      std::fprintf(stderr, "shle: detector %s, %d classes (device labels %s, score > %g), weights %s\n",
-                   nn::detection::faster_rcnn_name(det_variant), d->num_classes(), labels.c_str(), det_score,
-                   det_weights.c_str());
-      source = std::move(d);
+      source = shleapp::make_detector_source(det, "shle", false, &det_desc);
     } else {
       source = std::make_unique<shle::BoxesFileSource>(boxes, seq.frames.size());
     }

@@ -190,4 +190,41 @@ TEST(ShleEvalDataset, Errors) {
   EXPECT_FALSE(fs::exists(t / "o.csv"));
 }
 
+// The paper's table straight from a detector (the released model_final.pth's
+// network, here seeded random weights under its names), loaded once for every scene.
+TEST(ShleEvalDataset, DetectorOnEveryScene) {
+  TempDir t;
+  const std::string w = t / "d2.safetensors";
+  ASSERT_EQ(std::system((std::string(SYNTH_APP) + " --model detectron2_faster_rcnn_r50_fpn --classes 1 --out '" + w +
+                         "' > /dev/null")
+                            .c_str()),
+            0);
+  const std::string base = std::string(SHLE_EVAL_APP) + " --dataset disparity-height '" + dataset() + "' --scenes 17,18";
+  Result r = run(base + " --boxes detector --detector-model detectron2_faster_rcnn_r50_fpn --detector-weights '" + w +
+                     "' --detector-score 0 --box-rule widest --threads 2 --json '" + (t / "d.json") + "'",
+                 t);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;  // the detector once, then the two scenes
+  EXPECT_NE(r.err.find("shle_eval: detector detectron2_faster_rcnn_r50_fpn, 1 classes (score > 0)"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("| images_017 | 2.85 | 4 |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| images_018 | 2.20 | 4 |"), std::string::npos) << r.out;
+  json::Value j = json::parse(slurp(t / "d.json"), "d.json");
+  EXPECT_EQ(j.get("box_source")->str(), "detector");
+  ASSERT_EQ(j.get("scenes")->array().size(), 2u);
+
+  // The detector options belong to --boxes detector, and it needs its weights.
+  r = run(base + " --detector-weights '" + w + "'", t);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--detector-weights needs --boxes detector"), std::string::npos) << r.err;
+  r = run(base + " --boxes detector", t);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--boxes detector needs --detector-weights"), std::string::npos) << r.err;
+  r = run(base + " --boxes detector --detector-weights '" + (t / "none.safetensors") + "' --json '" + (t / "n.json") + "'",
+          t);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("none.safetensors"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(t / "n.json"));
+}
+
 }  // namespace
