@@ -15,9 +15,7 @@ BoxesFile parse_boxes_csv(std::string_view text, const std::string& source) {
   BoxesFile f;
   std::size_t line_no = 0, pos = 0;
   while (pos < text.size()) {
-    std::size_t nl = text.find('\n', pos);
-    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
-    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    const std::string_view line = next_line(text, &pos);
     ++line_no;
     std::string_view t = trim_field(line);
     if (t.empty() || t.front() == '#') continue;

@@ -40,6 +40,17 @@ void rgb_to_chw01(const RgbImage& image, std::vector<float>* out);
 // the image: no image, or a pixel buffer of the wrong size); *where names it.
 const RgbImage& detector_frame_image(const FrameContext& frame, std::string* where);
 
+// Plans `model` for a width x height frame unless it is planned for that size already
+// (*planned_w / *planned_h: the planned size, 0 after a failed plan). Planning
+// allocates every buffer for a size; a sequence normally has one.
+template <class Model>
+void plan_for_frame(Model& model, int width, int height, int* planned_w, int* planned_h) {
+  if (width == *planned_w && height == *planned_h) return;
+  *planned_w = *planned_h = 0;  // a failed plan must not leave a stale size behind
+  model.plan(height, width);
+  *planned_w = width, *planned_h = height;
+}
+
 class DetectorBoxSource : public BoxSource {
  public:
   // Errors name the weights file: a file that is not safetensors (weights::Error),

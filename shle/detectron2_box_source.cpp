@@ -36,11 +36,7 @@ std::vector<Candidate> Detectron2BoxSource::candidates(const FrameContext& frame
   std::string where;
   const RgbImage& img = detector_frame_image(frame, &where);
   try {
-    if (img.width != planned_w_ || img.height != planned_h_) {
-      planned_w_ = planned_h_ = 0;  // a failed plan must not leave a stale size behind
-      model_->plan(img.height, img.width);
-      planned_w_ = img.width, planned_h_ = img.height;
-    }
+    plan_for_frame(*model_, img.width, img.height, &planned_w_, &planned_h_);
     last_ = model_->forward(img.rgb.data());
   } catch (const nn::Error& e) {
     throw Error(where + ": " + e.what());

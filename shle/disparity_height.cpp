@@ -73,9 +73,7 @@ std::map<int, double> parse_gt_heights(std::string_view text, const std::string&
   std::size_t pos = 0, line_no = 0;
   bool first = true;
   while (pos < text.size()) {
-    std::size_t nl = text.find('\n', pos);
-    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
-    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    const std::string_view line = next_line(text, &pos);
     ++line_no;
     std::string_view t = trim_field(line);
     if (t.empty() || t.front() == '#') continue;

@@ -6,6 +6,13 @@
 
 namespace shle {
 
+std::string_view next_line(std::string_view text, std::size_t* pos) {
+  const std::size_t nl = text.find('\n', *pos);
+  const std::string_view line = text.substr(*pos, nl == std::string_view::npos ? std::string_view::npos : nl - *pos);
+  *pos = nl == std::string_view::npos ? text.size() : nl + 1;
+  return line;
+}
+
 std::string_view trim_field(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
   while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);

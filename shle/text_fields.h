@@ -3,9 +3,13 @@
 // accepts and refuses the same text.
 #pragma once
 
+#include <cstddef>
 #include <string_view>
 
 namespace shle {
+
+// The line of `text` starting at *pos, without its '\n'; *pos moves past it.
+std::string_view next_line(std::string_view text, std::size_t* pos);
 
 // `s` without leading blanks/tabs and trailing blanks/tabs/CR.
 std::string_view trim_field(std::string_view s);

@@ -9,13 +9,7 @@
 namespace nn::detection {
 
 ImageSizes detectron2_sizes(int h, int w, const Detectron2TransformConfig& cfg) {
-  if (h < 32 || w < 32)
-    throw Error("detector input is " + std::to_string(h) + "x" + std::to_string(w) +
-                ", smaller than the minimum 32x32");
-  if (h > 20000 || w > 20000)
-    throw Error("detector input is " + std::to_string(h) + "x" + std::to_string(w) + ", larger than 20000 px");
-  ImageSizes s;
-  s.orig_h = h, s.orig_w = w;
+  ImageSizes s = checked_input_size(h, w);
   const double size = cfg.min_size;
   const double scale = size / std::min(h, w);
   double newh, neww;

@@ -16,7 +16,7 @@
 
 namespace nn::detection {
 
-ImageSizes transform_sizes(int h, int w, const TransformConfig& cfg) {
+ImageSizes checked_input_size(int h, int w) {
   if (h < 32 || w < 32)
     throw Error("detector input is " + std::to_string(h) + "x" + std::to_string(w) +
                 ", smaller than the minimum 32x32");
@@ -24,6 +24,11 @@ ImageSizes transform_sizes(int h, int w, const TransformConfig& cfg) {
     throw Error("detector input is " + std::to_string(h) + "x" + std::to_string(w) + ", larger than 20000 px");
   ImageSizes s;
   s.orig_h = h, s.orig_w = w;
+  return s;
+}
+
+ImageSizes transform_sizes(int h, int w, const TransformConfig& cfg) {
+  ImageSizes s = checked_input_size(h, w);
   const float lo = static_cast<float>(std::min(h, w)), hi = static_cast<float>(std::max(h, w));
   const float scale = std::min(static_cast<float>(cfg.min_size) / lo, static_cast<float>(cfg.max_size) / hi);
   s.resized_h = static_cast<int>(std::floor(static_cast<double>(h) * static_cast<double>(scale)));

@@ -20,6 +20,10 @@ struct ImageSizes {
   int padded_h = 0, padded_w = 0;    // the batched tensor the backbone sees
 };
 
+// An ImageSizes holding only the original size h x w, after checking it is one a
+// detector takes (throws nn::Error below 32 px or above 20000 px).
+ImageSizes checked_input_size(int h, int w);
+
 // scale = min(min_size / short side, max_size / long side) in float32; output side =
 // floor(side * scale) in double. Throws nn::Error below 32 px or on absurd sizes.
 ImageSizes transform_sizes(int h, int w, const TransformConfig& cfg);
