@@ -1,4 +1,5 @@
-// stixelnext::parse_calibration (apps/stixelnext: K, T, width, height) on json::parse
+// stixelnext::parse_calibration (apps/stixelnext: K, T, width, height, or the authors'
+// fx, fy, cx, cy) on json::parse
 // of arbitrary text. That code is documented to throw std::runtime_error, which the
 // contract accepts here (exactly that type, not its subclasses).
 #include <cstddef>
@@ -15,7 +16,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::run(
       [&] {
         stixelnext::Calibration c = stixelnext::parse_calibration(json::parse(text, "calib.json"), "calib.json");
-        if (c.K.size() != 9 || c.T.size() != 16 || c.width < 1 || c.height < 1) std::abort();
+        // Our form carries a positive size; the authors' {fx, fy, cx, cy} form has none
+        // (0 x 0: the image's own), never one side only or a negative one.
+        if (c.K.size() != 9 || c.T.size() != 16) std::abort();
+        if (c.width < 0 || c.height < 0 || (c.width == 0) != (c.height == 0)) std::abort();
       },
       fuzz::Plain::AcceptRuntimeError);
   return 0;
