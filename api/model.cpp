@@ -67,13 +67,14 @@ nn::ExecOptions exec_of(const roadnn_model_params& p) {
   switch (raw_enum(p.max_isa)) {
     case ROADNN_ISA_SCALAR: e.max_isa = nn::Isa::Scalar; break;
     case ROADNN_ISA_AVX2: e.max_isa = nn::Isa::Avx2; break;
-    case ROADNN_ISA_AVX512:
-    case ROADNN_ISA_BEST: e.max_isa = nn::Isa::Avx512; break;
+    case ROADNN_ISA_AVX512: e.max_isa = nn::Isa::Avx512; break;
+    case ROADNN_ISA_NEON: e.max_isa = nn::Isa::Neon; break;
+    case ROADNN_ISA_BEST: e.max_isa = nn::detect_isa(); break;
     default:
       fail(ROADNN_ERROR_INVALID_ARGUMENT,
            "roadnn_model_params.max_isa " + std::to_string(raw_enum(p.max_isa)) + " is not a roadnn_isa");
   }
-  e.max_isa = nn::min_isa(e.max_isa, nn::detect_isa());
+  e.max_isa = nn::cap_isa(e.max_isa);  // a cap: at most that level of what the CPU has
   if (p.winograd != 0 && p.winograd != 1)
     fail(ROADNN_ERROR_INVALID_ARGUMENT, "roadnn_model_params.winograd must be 0 or 1");
   e.winograd = p.winograd == 1;

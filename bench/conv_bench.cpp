@@ -21,7 +21,7 @@ void BM_Conv3x3(benchmark::State& state) {
   const bool winograd = state.range(4) != 0;
   const auto isa = static_cast<nn::Isa>(state.range(5));
   const int threads = 2;
-  if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa())) {
+  if (!nn::isa_supported(isa)) {
     state.SkipWithError("ISA not supported by this CPU");
     return;
   }

@@ -19,7 +19,7 @@ void BM_DwConv(benchmark::State& state) {
   const int stride = static_cast<int>(state.range(4));
   const auto isa = static_cast<nn::Isa>(state.range(5));
   const int threads = static_cast<int>(state.range(6));
-  if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa())) {
+  if (!nn::isa_supported(isa)) {
     state.SkipWithError("ISA not supported by this CPU");
     return;
   }

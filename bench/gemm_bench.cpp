@@ -174,7 +174,7 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
 int register_all() {
   for (int u = 0; u < nn::gemm_ukernel_count(); ++u) {
     const nn::GemmUkernelInfo& info = nn::gemm_ukernel(u);
-    if (static_cast<int>(info.isa) > static_cast<int>(nn::detect_isa())) continue;
+    if (!nn::isa_supported(info.isa)) continue;
     for (const GemmShape& s : kShapes)
       for (int threads : {1, 2}) {
         const std::string suffix =

@@ -18,7 +18,7 @@ void BM_LayerNorm(benchmark::State& state) {
   const int c = static_cast<int>(state.range(1));
   const auto isa = static_cast<nn::Isa>(state.range(2));
   const int threads = static_cast<int>(state.range(3));
-  if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa())) {
+  if (!nn::isa_supported(isa)) {
     state.SkipWithError("ISA not supported by this CPU");
     return;
   }

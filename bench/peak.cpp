@@ -59,7 +59,7 @@ void bm_peak(benchmark::State& state, nn::Isa isa, int threads) {
 
 int register_peak() {
   for (nn::Isa isa : {nn::Isa::Scalar, nn::Isa::Avx2, nn::Isa::Avx512}) {
-    if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa())) continue;
+    if (!nn::isa_supported(isa)) continue;
     for (int threads : {1, 2}) {
       const std::string name = std::string("peak_fma/") + nn::isa_name(isa) +
                                "/threads:" + std::to_string(threads);

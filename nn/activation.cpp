@@ -3,12 +3,10 @@
 #include <cmath>
 
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 
 namespace nn {
 
-// nn/activation_avx2.cpp, nn/activation_avx512.cpp; act is static_cast<int>(Act).
-void apply_act_avx2(int act, float* x, std::size_t count);
-void apply_act_avx512(int act, float* x, std::size_t count);
 
 float act_ref(Act act, float x) {
   switch (act) {
@@ -48,17 +46,9 @@ void apply_act(Act act, float* x, std::size_t count) { apply_act(act, x, count, 
 
 void apply_act(Act act, float* x, std::size_t count, Isa isa) {
   if (act == Act::None || count == 0) return;
-  switch (isa) {
-    case Isa::Avx512:
-      apply_act_avx512(static_cast<int>(act), x, count);
-      return;
-    case Isa::Avx2:
-      apply_act_avx2(static_cast<int>(act), x, count);
-      return;
-    case Isa::Scalar:
-      break;
-  }
-  apply_act_ref(act, x, count);
+  kernel_table(isa).apply_act(static_cast<int>(act), x, count);
 }
+
+void apply_act_scalar(int act, float* x, std::size_t count) { apply_act_ref(static_cast<Act>(act), x, count); }
 
 }  // namespace nn

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "nn/dwconv_kernel.h"
+#include "nn/kernel_table.h"
 #include "nn/error.h"
 
 #ifdef ROADNN_OPENMP
@@ -15,14 +16,10 @@
 namespace nn {
 namespace {
 
-// Channels per packed vector; the scalar path keeps whole rows of taps instead.
+// Channels per packed vector; 0 for the scalar path, which keeps whole rows of taps.
 int lanes_of(Isa isa) {
-  switch (isa) {
-    case Isa::Avx512: return 16;
-    case Isa::Avx2: return 8;
-    case Isa::Scalar: break;
-  }
-  return 0;
+  const KernelTable& k = kernel_table(isa);
+  return k.dwconv_block ? k.lanes : 0;
 }
 
 std::string describe(const DwConvParams& p) {
@@ -134,7 +131,7 @@ DwConvWeights DwConvWeights::pack(const float* w, const float* bias, int c, cons
   check_act(p.act);
   if (c < 1) throw Error("dwconv: channel count must be positive, got " + std::to_string(c));
   if (!w) throw Error("dwconv: null weights");
-  if (static_cast<int>(isa) > static_cast<int>(detect_isa())) isa = detect_isa();
+  isa = cap_isa(isa);
 
   DwConvWeights out;
   out.c_ = c;
@@ -172,7 +169,8 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
   const Shape& os = out.shape;
   const int threads = team_size();
 
-  if (w.isa() == Isa::Scalar) {
+  const DwConvBlockFn block = kernel_table(w.isa()).dwconv_block;
+  if (!block) {
     const long long rows = static_cast<long long>(os.n) * os.h;
     parallel_for(rows, rows > 1, [&](long long r_) {
       const long long r = static_cast<long long>(r_);
@@ -198,7 +196,6 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
   job.pad_h = p.pad_h;
   job.pad_w = p.pad_w;
   job.act = static_cast<int>(p.act);
-  auto* block = w.isa() == Isa::Avx512 ? &dwconv_block_avx512 : &dwconv_block_avx2;
 
   // Work items: (image, chunk of output rows, group of channel blocks). Inside an
   // item the kernel walks tiles along W and, per tile, every block of the group, so

@@ -32,6 +32,8 @@ constexpr int kDwConvRingTargetBytes = 32 * 1024;
 // Computes output rows [oy0, oy1) of image `n` for channel blocks [cb0, cb1) (block
 // cb covers channels [cb*L, cb*L+L) clipped to c). Each output element is summed in
 // the fixed order ky, kx ascending, so the split into calls never changes a result.
+using DwConvBlockFn = void (*)(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
+void dwconv_block_neon(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
 void dwconv_block_avx512(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
 void dwconv_block_avx2(const DwConvJob& job, int n, int cb0, int cb1, int oy0, int oy1);
 

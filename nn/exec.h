@@ -13,7 +13,7 @@
 namespace nn {
 
 struct ExecOptions {
-  Isa max_isa = Isa::Avx512;  // capped by detect_isa()
+  Isa max_isa = Isa::Avx512;  // a cap (nn/isa.h: cap_isa): the default is the best there is
   int threads = 0;            // <= 0: all cores
   bool winograd = true;       // pack 3x3 stride-1 convolutions for Winograd F(4x4, 3x3)
 };

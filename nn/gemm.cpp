@@ -22,6 +22,7 @@
 #include "nn/activation.h"
 #include "nn/error.h"
 #include "nn/gemm_kernels.h"
+#include "nn/kernel_table.h"
 
 #ifdef ROADNN_OPENMP
 #include <omp.h>
@@ -92,6 +93,7 @@ void scalar_dispatch(const GemmTile& t) {
   void fn(const GemmTile& tile) { scalar_dispatch<mr>(tile); }
 #define NN_GEMM_DEFINE_Avx2(fn, mr, nr)
 #define NN_GEMM_DEFINE_Avx512(fn, mr, nr)
+#define NN_GEMM_DEFINE_Neon(fn, mr, nr)
 #define NN_GEMM_DEFINE(fn, isa, mr, nr) NN_GEMM_DEFINE_##isa(fn, mr, nr)
 NN_GEMM_UKERNELS(NN_GEMM_DEFINE)
 #undef NN_GEMM_DEFINE
@@ -128,7 +130,7 @@ int gemm_default_ukernel(Isa isa) {
 int gemm_ukernel_for(Isa isa, int n) {
   const int def = gemm_default_ukernel(isa);
   if (n <= 0) return def;
-  const int lanes = isa == Isa::Avx2 ? 8 : 16;
+  const int lanes = kernel_table(isa).lanes;
   auto cost = [n, lanes](int u) {
     const int nr = kUkernels[u].nr;
     return static_cast<double>((n + nr - 1) / nr * nr) * (nr == lanes ? 1.2 : 1.0);
@@ -151,7 +153,7 @@ GemmWeights GemmWeights::pack_for_ukernel(const float* w, int n, int k, int uker
     throw Error("gemm: cannot pack a weight matrix of shape [" + std::to_string(n) + " x " +
                 std::to_string(k) + "]");
   if (!w) throw Error("gemm: weight pointer is null");
-  if (static_cast<int>(info.isa) > static_cast<int>(detect_isa()))
+  if (!isa_supported(info.isa))
     throw Error(std::string("gemm: ") + info.name + " needs " + isa_name(info.isa) +
                 ", which this CPU does not support");
   GemmWeights out;

@@ -11,10 +11,15 @@
 #include "nn/error.h"
 #include "nn/gemm_bf16_kernels.h"
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 
 namespace nn {
 
-bool bf16_gemm_available() { return detect_avx512_bf16() && active_isa() == Isa::Avx512; }
+// The hardware's bf16 kernels (the best ISA's table): the packed layout is theirs, so the
+// same kernel runs whatever cap a later call has (this may run on a worker thread).
+const KernelTable& bf16_kernels() { return kernel_table(detect_isa()); }
+
+bool bf16_gemm_available() { return bf16_kernels().gemm_bf16 && active_isa() == detect_isa(); }
 
 bf16 f32_to_bf16(float x) {
   std::uint32_t u;
@@ -36,8 +41,8 @@ float bf16_to_f32(bf16 x) {
 void convert_to_bf16(int rows, int cols, const float* src, std::ptrdiff_t lds, bf16* dst,
                      std::ptrdiff_t ldd) {
   if (rows <= 0 || cols <= 0) return;
-  // The hardware alone decides (this may run on a worker thread): both forms give the same bits.
-  if (detect_avx512_bf16()) return convert_to_bf16_avx512bf16(rows, cols, src, lds, dst, ldd);
+  // Both forms give the same bits.
+  if (bf16_kernels().convert_to_bf16) return bf16_kernels().convert_to_bf16(rows, cols, src, lds, dst, ldd);
   for (int r = 0; r < rows; ++r) {
     for (int j = 0; j < cols; ++j) dst[r * ldd + j] = f32_to_bf16(src[r * lds + j]);
     if (cols & 1) dst[r * ldd + cols] = 0;
@@ -91,7 +96,7 @@ GemmPacked pair_view(int m, const bf16* a, std::ptrdiff_t lda, const GemmWeights
   if (ep.residual && ep.ldr < w.n())
     throw Error("gemm_bf16: ldr " + std::to_string(ep.ldr) + " < N " + std::to_string(w.n()));
   return {reinterpret_cast<const float*>(w.panels()), w.n(), kp, kGemmBf16Mr, kGemmBf16Nr,
-          &gemm_bf16_8x48_avx512bf16};
+          bf16_kernels().gemm_bf16};
 }
 
 const float* pairs_of(const bf16* a) { return reinterpret_cast<const float*>(a); }

@@ -73,13 +73,21 @@ using GemmUkernelFn = void (*)(const GemmTile& tile);
 //   K 27 GEMM; at K 672, N 160 it is 15 % slower than 8x48, hence the 1.2.
 // - Of the AVX2 pair (12 ymm accumulators each), 4x24 (7 loads per 12 FMAs against 8) is
 //   ahead by up to 20% on K = 96 and on large W; 6x16 wins at N = 64 (18.9 -> 16.7 ms).
-#define NN_GEMM_UKERNELS(X)                 \
+// The list holds the kernels of this build's architecture (nn/arch/x86, nn/arch/arm)
+// and the portable scalar one.
+#if defined(__x86_64__)
+#define NN_GEMM_UKERNELS_ARCH(X)            \
   X(gemm_f32_8x48_avx512, Avx512, 8, 48)    \
   X(gemm_f32_4x96_avx512, Avx512, 4, 96)    \
   X(gemm_f32_6x64_avx512, Avx512, 6, 64)    \
   X(gemm_f32_14x16_avx512, Avx512, 14, 16)  \
   X(gemm_f32_4x24_avx2, Avx2, 4, 24)        \
-  X(gemm_f32_6x16_avx2, Avx2, 6, 16)        \
+  X(gemm_f32_6x16_avx2, Avx2, 6, 16)
+#else
+#define NN_GEMM_UKERNELS_ARCH(X)
+#endif
+#define NN_GEMM_UKERNELS(X) \
+  NN_GEMM_UKERNELS_ARCH(X)  \
   X(gemm_f32_4x16_scalar, Scalar, 4, 16)
 
 #define NN_GEMM_DECLARE_UKERNEL(fn, isa, mr, nr) void fn(const GemmTile& tile);

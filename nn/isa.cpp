@@ -1,7 +1,9 @@
 #include "nn/isa.h"
 
 #include <cstring>
+#include <initializer_list>
 
+#include "nn/cpu_features.h"
 #include "nn/exec.h"
 
 namespace nn {
@@ -13,44 +15,67 @@ const char* isa_name(Isa isa) {
     case Isa::Scalar: return "scalar";
     case Isa::Avx2: return "avx2";
     case Isa::Avx512: return "avx512";
+    case Isa::Neon: return "neon";
   }
   return "unknown";
 }
 
+int isa_level(Isa isa) {
+  switch (isa) {
+    case Isa::Scalar: return 0;
+    case Isa::Avx2: return 1;
+    case Isa::Neon: return 1;
+    case Isa::Avx512: return 2;
+  }
+  return 0;
+}
+
 bool parse_isa(const char* text, Isa* out) {
   if (!text) return false;
-  if (std::strcmp(text, "scalar") == 0) { *out = Isa::Scalar; return true; }
-  if (std::strcmp(text, "avx2") == 0) { *out = Isa::Avx2; return true; }
-  if (std::strcmp(text, "avx512") == 0) { *out = Isa::Avx512; return true; }
+  for (Isa isa : {Isa::Scalar, Isa::Avx2, Isa::Avx512, Isa::Neon}) {
+    if (std::strcmp(text, isa_name(isa)) == 0) {
+      *out = isa;
+      return true;
+    }
+  }
   return false;
+}
+
+bool isa_supported(Isa isa) {
+  const CpuFeatures& f = cpu_features();
+  switch (isa) {
+    case Isa::Scalar: return true;
+#if defined(__x86_64__)
+    case Isa::Avx2: return f.avx2 && f.fma && f.f16c;
+    case Isa::Avx512: return f.avx512f && f.avx512bw && f.avx512dq && f.avx512vl && f.fma && f.avx2 && f.f16c;
+#endif
+#if defined(__aarch64__)
+    case Isa::Neon: return f.neon;
+#endif
+    default: return false;
+  }
 }
 
 Isa detect_isa() {
   static const Isa cached = [] {
-    __builtin_cpu_init();
-    // libgcc's checks include the OS having enabled the register state (XCR0).
-    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl") &&
-        __builtin_cpu_supports("fma"))
-      return Isa::Avx512;
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-        __builtin_cpu_supports("f16c"))
-      return Isa::Avx2;
-    return Isa::Scalar;
+    Isa best = Isa::Scalar;
+    for (Isa isa : {Isa::Avx2, Isa::Avx512, Isa::Neon})
+      if (isa_supported(isa) && isa_level(isa) > isa_level(best)) best = isa;
+    return best;
   }();
   return cached;
 }
 
-bool detect_avx512_bf16() {
-  static const bool cached = [] {
-    __builtin_cpu_init();
-    return detect_isa() == Isa::Avx512 && __builtin_cpu_supports("avx512bf16");
-  }();
-  return cached;
+Isa cap_isa(Isa cap) {
+  if (isa_supported(cap)) return cap;
+  Isa best = Isa::Scalar;
+  for (Isa isa : {Isa::Avx2, Isa::Avx512, Isa::Neon})
+    if (isa_supported(isa) && isa_level(isa) <= isa_level(cap) && isa_level(isa) > isa_level(best)) best = isa;
+  return best;
 }
 
-Isa active_isa() { return min_isa(detect_isa(), current_exec().max_isa); }
+Isa active_isa() { return cap_isa(current_exec().max_isa); }
 
-void set_isa(Isa isa) { mutable_exec().max_isa = min_isa(isa, detect_isa()); }
+void set_isa(Isa isa) { mutable_exec().max_isa = cap_isa(isa); }
 
 }  // namespace nn

@@ -6,6 +6,7 @@
 
 #include "nn/error.h"
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 #include "nn/layernorm_kernel.h"
 
 #ifdef ROADNN_OPENMP
@@ -66,16 +67,11 @@ void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, floa
 void layernorm(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
                std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps, Isa isa) {
   check_args("layernorm", rows, c, x, ldx, y, ldy);
-  switch (isa) {
-    case Isa::Avx512:
-      layernorm_rows_avx512(rows, c, x, ldx, y, ldy, gamma, beta, eps);
-      return;
-    case Isa::Avx2:
-      layernorm_rows_avx2(rows, c, x, ldx, y, ldy, gamma, beta, eps);
-      return;
-    case Isa::Scalar:
-      break;
-  }
+  kernel_table(isa).layernorm_rows(rows, c, x, ldx, y, ldy, gamma, beta, eps);
+}
+
+void layernorm_rows_scalar(std::size_t rows, int c, const float* x, std::ptrdiff_t ldx, float* y,
+                           std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps) {
   for (std::size_t r = 0; r < rows; ++r)
     layernorm_row_scalar(c, x + static_cast<std::ptrdiff_t>(r) * ldx,
                          y + static_cast<std::ptrdiff_t>(r) * ldy, gamma, beta, eps);

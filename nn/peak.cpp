@@ -1,11 +1,10 @@
 #include "nn/peak.h"
 
-#include <emmintrin.h>
-
 #include <algorithm>
 #include <chrono>
 
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 
 #ifdef ROADNN_OPENMP
 #include <omp.h>
@@ -13,30 +12,7 @@
 
 namespace nn {
 
-// nn/peak_avx2.cpp, nn/peak_avx512.cpp.
-double peak_fma_avx2(long iterations, float* sink);
-double peak_fma_avx512(long iterations, float* sink);
-
 namespace {
-
-// What the scalar path can reach: baseline SSE2, a multiply and an add per lane (no FMA),
-// 12 independent chains.
-double peak_sse2(long iterations, float* sink) {
-  __m128 acc[12];
-#pragma GCC unroll 12
-  for (int i = 0; i < 12; ++i) acc[i] = _mm_set1_ps(static_cast<float>(i) * 1e-3f);
-  const __m128 mul = _mm_set1_ps(0.999999f), add = _mm_set1_ps(1e-6f);
-  for (long it = 0; it < iterations; ++it) {
-#pragma GCC unroll 12
-    for (int i = 0; i < 12; ++i) acc[i] = _mm_add_ps(_mm_mul_ps(acc[i], mul), add);
-  }
-  __m128 s = acc[0];
-  for (int i = 1; i < 12; ++i) s = _mm_add_ps(s, acc[i]);
-  alignas(16) float lanes[4];
-  _mm_store_ps(lanes, s);
-  for (float v : lanes) *sink += v;
-  return static_cast<double>(iterations) * 12 * 4 * 2;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -83,12 +59,7 @@ double measure(Isa isa, int threads) {
 }  // namespace
 
 double peak_loop(int isa, long iterations, float* sink) {
-  switch (static_cast<Isa>(isa)) {
-    case Isa::Avx512: return peak_fma_avx512(iterations, sink);
-    case Isa::Avx2: return peak_fma_avx2(iterations, sink);
-    case Isa::Scalar: break;
-  }
-  return peak_sse2(iterations, sink);
+  return kernel_table(static_cast<Isa>(isa)).peak_fma(iterations, sink);
 }
 
 double peak_gflops(int threads) { return measure(active_isa(), threads); }

@@ -9,7 +9,7 @@ namespace nn {
 // ~0.3 s, best of three runs: about a second per call; callers cache it).
 double peak_gflops(int threads);
 
-// One run of the loop of kernel set `isa` (0 scalar/SSE2, 1 AVX2, 2 AVX-512, as nn::Isa)
+// One run of the loop of kernel set `isa` (static_cast<int>(nn::Isa); its kernel table's peak_fma)
 // for `iterations` rounds on the calling thread; returns the flops performed and adds
 // to *sink so the loop is kept.
 double peak_loop(int isa, long iterations, float* sink);

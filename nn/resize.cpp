@@ -7,6 +7,7 @@
 
 #include "nn/error.h"
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 #include "nn/resize_kernel.h"
 
 #ifdef ROADNN_OPENMP
@@ -59,7 +60,14 @@ Lerp linear_src(long long dst, long long in, long long out, float ratio) {
   return Lerp{i0, i0 < in - 1 ? i0 + 1 : i0, 1.0f - l1, l1};
 }
 
-void bilinear_row_scalar(const float* row0, const float* row1, float h0, float h1,
+
+#ifdef ROADNN_OPENMP
+// Threads for a parallel loop: the whole team, or 1 when already inside a region.
+#endif
+
+}  // namespace
+
+void resize_bilinear_row_scalar(const float* row0, const float* row1, float h0, float h1,
                          const long long* x0, const long long* x1, const float* w0,
                          const float* w1, int count, int c, float* out) {
   for (int i = 0; i < count; ++i, out += c) {
@@ -71,12 +79,6 @@ void bilinear_row_scalar(const float* row0, const float* row1, float h0, float h
     }
   }
 }
-
-#ifdef ROADNN_OPENMP
-// Threads for a parallel loop: the whole team, or 1 when already inside a region.
-#endif
-
-}  // namespace
 
 void upsample_nearest(const ConstTensorView& in, const TensorView& out, double scale_h,
                       double scale_w) {
@@ -103,7 +105,7 @@ void resize_bilinear(const ConstTensorView& in, const TensorView& out, double sc
   const Shape& is = in.shape;
   const Shape& os = out.shape;
   const float sh = axis_scale(is.h, os.h, scale_h), sw = axis_scale(is.w, os.w, scale_w);
-  const bool avx2 = static_cast<int>(active_isa()) >= static_cast<int>(Isa::Avx2);
+  const ResizeBilinearRowFn row_kernel = kernel_table(active_isa()).resize_bilinear_row;
   // Items: (image, chunk of output rows). The column taps of a 128-pixel segment
   // are computed once per item on the stack (no allocation) and reused by its rows.
   constexpr int kChunk = 8, kSeg = 128;
@@ -130,10 +132,7 @@ void resize_bilinear(const ConstTensorView& in, const TensorView& out, double sc
         const float* row0 = in.pixel(n, static_cast<int>(y.i0), 0);
         const float* row1 = in.pixel(n, static_cast<int>(y.i1), 0);
         float* dst = out.pixel(n, oy, ox0);
-        if (avx2)
-          resize_bilinear_row_avx2(row0, row1, y.l0, y.l1, x0, x1, w0, w1, count, is.c, dst);
-        else
-          bilinear_row_scalar(row0, row1, y.l0, y.l1, x0, x1, w0, w1, count, is.c, dst);
+        row_kernel(row0, row1, y.l0, y.l1, x0, x1, w0, w1, count, is.c, dst);
       }
     }
   });

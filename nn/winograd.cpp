@@ -17,6 +17,7 @@
 #include "nn/error.h"
 #include "nn/exec.h"
 #include "nn/threads.h"
+#include "nn/kernel_table.h"
 #include "nn/winograd_kernel.h"
 #include "nn/winograd_transform.h"
 
@@ -48,23 +49,8 @@ std::size_t round16(std::size_t floats) { return (floats + 15) / 16 * 16; }
 using InputFn = void (*)(const WinogradInputTile&);
 using OutputFn = void (*)(const WinogradOutputTile&);
 
-InputFn input_fn(Isa isa) {
-  switch (isa) {
-    case Isa::Avx512: return winograd_input_tile_avx512;
-    case Isa::Avx2: return winograd_input_tile_avx2;
-    case Isa::Scalar: break;
-  }
-  return winograd_input_tile_scalar;
-}
-
-OutputFn output_fn(Isa isa) {
-  switch (isa) {
-    case Isa::Avx512: return winograd_output_tile_avx512;
-    case Isa::Avx2: return winograd_output_tile_avx2;
-    case Isa::Scalar: break;
-  }
-  return winograd_output_tile_scalar;
-}
+InputFn input_fn(Isa isa) { return kernel_table(isa).winograd_input_tile; }
+OutputFn output_fn(Isa isa) { return kernel_table(isa).winograd_output_tile; }
 
 }  // namespace
 

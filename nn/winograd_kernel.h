@@ -38,6 +38,8 @@ void winograd_output_tile_scalar(const WinogradOutputTile& t);
 void winograd_input_tile_avx512(const WinogradInputTile& t);
 void winograd_output_tile_avx512(const WinogradOutputTile& t);
 void winograd_input_tile_avx2(const WinogradInputTile& t);
+void winograd_input_tile_neon(const WinogradInputTile& t);
+void winograd_output_tile_neon(const WinogradOutputTile& t);
 void winograd_output_tile_avx2(const WinogradOutputTile& t);
 
 }  // namespace nn

@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
               "                            docs/NUMERICS.md for the names and the dump.* metadata)", &dump_path);
   args.option("dump-filter", "REGEX", "--dump only the tensors whose names contain a match of REGEX (ECMAScript)",
               &dump_filter);
-  args.option("isa", "NAME", "force a kernel set: scalar, avx2 or avx512 (default: best available)", &isa_name);
+  args.option("isa", "NAME", "force a kernel set: scalar, avx2, avx512 (x86-64) or neon (aarch64) (default: best available)", &isa_name);
   args.option("precision", "P", std::string("ConvNeXt models: ") + apps::kPrecisionHelp, &precision_name);
   args.option("conv3x3", "ALGO", "3x3 stride-1 convolutions (detectors): winograd (default; F(4x4,3x3), a quarter\n"
               "                            of the multiply-adds) or direct (im2col; rounds as closely to PyTorch as the\n"
@@ -156,9 +156,9 @@ int main(int argc, char** argv) {
   if (threads < 0) args.fail("--threads must be >= 0");
   if (!isa_name.empty()) {
     nn::Isa isa;
-    if (!nn::parse_isa(isa_name.c_str(), &isa)) args.fail("--isa must be scalar, avx2 or avx512");
-    if (static_cast<int>(isa) > static_cast<int>(nn::detect_isa()))
-      args.fail(std::string("--isa ") + isa_name + ": this CPU supports at most " + nn::isa_name(nn::detect_isa()));
+    if (!nn::parse_isa(isa_name.c_str(), &isa)) args.fail("--isa must be scalar, avx2, avx512 or neon");
+    if (!nn::isa_supported(isa))
+      args.fail(std::string("--isa ") + isa_name + ": this build and CPU do not support it; the best they have is " + nn::isa_name(nn::detect_isa()));
     nn::set_isa(isa);
   }
   if (!conv3x3.empty()) {

@@ -73,6 +73,7 @@ typedef enum roadnn_isa {
   ROADNN_ISA_SCALAR = 0,
   ROADNN_ISA_AVX2 = 1,   /* AVX2 + FMA */
   ROADNN_ISA_AVX512 = 2, /* AVX-512 F/BW/DQ/VL */
+  ROADNN_ISA_NEON = 3,   /* aarch64 Advanced SIMD; a cap of avx2/avx512 on ARM means neon */
   ROADNN_ISA_BEST = 99   /* whatever the CPU has (default) */
 } roadnn_isa;
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "nn/isa.h"
+#include "nn/kernel_table.h"
 #include "nn/models/detection/roi_align_bin.h"
 
 namespace nn::detection {
@@ -68,9 +69,7 @@ void roi_align_one(const ConstTensorView& feature, int n, const Box& roi, const 
   const std::size_t sample_count = static_cast<std::size_t>(grid_h) * grid_w;
   // The fixed 2 x 2 grid fits on the stack; adaptive sampling uses the caller's
   // planned room, the heap only for a one-off call without it.
-  void (*bin_kernel)(const RoiBin&) = roi_bin_scalar;
-  if (p.isa == Isa::Avx512) bin_kernel = roi_bin_avx512;
-  else if (p.isa == Isa::Avx2) bin_kernel = roi_bin_avx2;
+  void (*bin_kernel)(const RoiBin&) = kernel_table(p.isa).roi_bin;
   RoiSample on_stack[16];
   std::vector<RoiSample> on_heap;
   RoiSample* samples = on_stack;

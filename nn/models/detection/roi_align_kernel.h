@@ -26,5 +26,6 @@ struct RoiBin {
 void roi_bin_scalar(const RoiBin& b);
 void roi_bin_avx2(const RoiBin& b);
 void roi_bin_avx512(const RoiBin& b);
+void roi_bin_neon(const RoiBin& b);
 
 }  // namespace nn::detection

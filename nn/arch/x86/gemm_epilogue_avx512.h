@@ -5,7 +5,7 @@
 #pragma once
 
 #include "nn/gemm_kernels.h"
-#include "nn/vecmath_avx512.h"  // first: it includes <immintrin.h> with GCC 12's false warning silenced
+#include "nn/arch/x86/vecmath_avx512.h"  // first: it includes <immintrin.h> with GCC 12's false warning silenced
 
 namespace nn {
 namespace {

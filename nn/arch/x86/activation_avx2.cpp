@@ -1,6 +1,8 @@
 #include <cstddef>
 
-#include "nn/vecmath_avx2.h"
+#include "nn/activation_kernel.h"
+
+#include "nn/arch/x86/vecmath_avx2.h"
 
 namespace nn {
 namespace {

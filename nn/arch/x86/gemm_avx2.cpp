@@ -5,7 +5,7 @@
 #include <cstddef>
 
 #include "nn/gemm_kernels.h"
-#include "nn/vecmath_avx2.h"
+#include "nn/arch/x86/vecmath_avx2.h"
 
 namespace nn {
 namespace {

@@ -1,6 +1,6 @@
 // AVX2+FMA element-wise math shared by the activation and GEMM-epilogue kernels, so both
 // produce the same bits. Include only from *_avx2.cpp files (compiled with AVX2 flags).
-// Same definitions and accuracy as nn/vecmath_avx512.h; the GELU table has 8 intervals
+// Same definitions and accuracy as nn/arch/x86/vecmath_avx512.h; the GELU table has 8 intervals
 // (one vpermps reaches 8 entries), hence a degree-6 polynomial.
 #pragma once
 
@@ -17,7 +17,7 @@
 namespace nn {
 namespace {
 
-// See nn/vecmath_avx512.h for the fits.
+// See nn/arch/x86/vecmath_avx512.h for the fits.
 constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
                 kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
 constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;

@@ -2,6 +2,8 @@
 // (FMA latency x FMA ports on current cores), registers only.
 #include <immintrin.h>
 
+#include "nn/peak_kernel.h"
+
 namespace nn {
 
 double peak_fma_avx2(long iterations, float* sink) {

@@ -5,7 +5,7 @@
 #include <cstddef>
 
 #include "nn/gemm_kernels.h"
-#include "nn/gemm_epilogue_avx512.h"
+#include "nn/arch/x86/gemm_epilogue_avx512.h"
 
 namespace nn {
 namespace {

@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "nn/gemm_bf16_kernels.h"
-#include "nn/gemm_epilogue_avx512.h"
+#include "nn/arch/x86/gemm_epilogue_avx512.h"
 
 namespace nn {
 namespace {

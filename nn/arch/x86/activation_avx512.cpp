@@ -1,6 +1,8 @@
 #include <cstddef>
 
-#include "nn/vecmath_avx512.h"
+#include "nn/activation_kernel.h"
+
+#include "nn/arch/x86/vecmath_avx512.h"
 
 namespace nn {
 namespace {

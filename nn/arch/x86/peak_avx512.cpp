@@ -2,6 +2,8 @@
 // (more than FMA latency x FMA ports on current cores), registers only.
 #include <immintrin.h>
 
+#include "nn/peak_kernel.h"
+
 namespace nn {
 
 // Runs `iterations` rounds of 24 FMAs on 16 lanes; returns the flops performed. Strict FP
