@@ -1,6 +1,8 @@
 // What the CPU (and the OS) offers, probed once. This is the only place in roadnn that
 // asks the hardware: nn/isa.cpp turns it into the ISA levels and nn/kernel_table.cpp into
-// the kernels; everything else asks those two.
+// the kernels; everything else asks those two, except shle/mil_haar.cpp, which mimics
+// OpenCV's own dispatch (its integral image's rounding depends on OpenCV's vector width,
+// whatever our kernel cap is).
 #pragma once
 
 namespace nn {

@@ -1,8 +1,7 @@
 // The kernels of one ISA, in one struct (MLAS's platform struct, XNNPACK's configs): filled
 // once per ISA of this build's architecture, chosen by the model's options (nn::active_isa()
 // or the ISA a packed weight set was made for). Every op driver takes its kernel from here;
-// nothing else picks a kernel by ISA or asks the CPU (nn/cpu_features.h is read only by
-// nn/isa.cpp and this table).
+// nothing else picks a kernel by ISA or asks the CPU (nn/cpu_features.h).
 //
 // The GEMM's micro-kernels have their own list (nn/gemm_kernels.h: NN_GEMM_UKERNELS, one
 // entry per tile shape, several per ISA); the table names the first (default) one.

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "nn/cpu_features.h"
+
 namespace shle {
 
 void mil_integral(const GrayView& img, int lanes, int channels, MilIntegral* out) {
@@ -43,17 +45,13 @@ void mil_integral(const GrayView& img, int lanes, int channels, MilIntegral* out
 }
 
 int opencv_integral_lanes() {
-#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
-  // OpenCV's AVX512_SKX level needs F, CD, BW, DQ and VL; its AVX2 level AVX2.
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
-      __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
-      __builtin_cpu_supports("avx512vl"))
-    return 32;
-  if (__builtin_cpu_supports("avx2")) return 16;
+  // OpenCV's own dispatch (not our kernel cap) decides, so the CPU's features do:
+  // its AVX512_SKX level needs F, CD, BW, DQ and VL; its AVX2 level AVX2; otherwise
+  // 128-bit vectors (SSE2, NEON and others).
+  const nn::CpuFeatures& f = nn::cpu_features();
+  if (f.avx512f && f.avx512cd && f.avx512bw && f.avx512dq && f.avx512vl) return 32;
+  if (f.avx2) return 16;
   return 8;
-#else
-  return 8;  // 128-bit vectors (NEON and others)
-#endif
 }
 
 bool draw_haar_feature(int w, int h, GlibcRand* rand, HaarFeature* out, long max_attempts) {
