@@ -18,7 +18,6 @@
 // last row, so results never depend on which rows are processed together.
 #pragma once
 
-#include <cmath>
 #include <cstddef>
 
 #include "nn/layernorm_kernel.h"
@@ -30,6 +29,7 @@ template <class Ops>
 void layernorm_group(const float* const* x, float* const* y, int nstore, int c,
                      const float* gamma, const float* beta, float eps) {
   using V = typename Ops::V;
+  using V4 = typename Ops::V4;  // the four rows' statistics, one lane each
   constexpr int L = Ops::kLanes;
   const int full = c / L;
   const int tail = c % L;
@@ -49,10 +49,11 @@ void layernorm_group(const float* const* x, float* const* y, int nstore, int c,
     for (int r = 0; r < 4; ++r) a0[r] = Ops::add(a0[r], Ops::loadu(x[r] + v * L));
   if (tail)
     for (int r = 0; r < 4; ++r) a1[r] = Ops::add(a1[r], Ops::load_part(x[r] + full * L, mask));
-  float mean[4];
-  Ops::fold4(Ops::add(a0[0], a1[0]), Ops::add(a0[1], a1[1]), Ops::add(a0[2], a1[2]),
-             Ops::add(a0[3], a1[3]), mean);
-  for (int r = 0; r < 4; ++r) mean[r] /= cf;
+  const V4 m4 = Ops::fold4(Ops::add(a0[0], a1[0]), Ops::add(a0[1], a1[1]),
+                          Ops::add(a0[2], a1[2]), Ops::add(a0[3], a1[3])) /
+                cf;
+  alignas(16) float mean[4];
+  __builtin_memcpy(mean, &m4, sizeof(mean));
 
   // Pass 2: sums of d = x - m and of d^2.
   V m[4], e[4];
@@ -81,16 +82,14 @@ void layernorm_group(const float* const* x, float* const* y, int nstore, int c,
       a1[r] = Ops::fma(d1, d1, a1[r]);
       e[r] = Ops::add(e[r], d1);
     }
-  float delta[4], sq[4], rstd[4];
-  Ops::fold4(e[0], e[1], e[2], e[3], delta);
-  Ops::fold4(Ops::add(a0[0], a1[0]), Ops::add(a0[1], a1[1]), Ops::add(a0[2], a1[2]),
-             Ops::add(a0[3], a1[3]), sq);
-  for (int r = 0; r < 4; ++r) {
-    delta[r] /= cf;
-    const float q = (sq[r] - (delta[r] * delta[r]) * cf) / cf;
-    const float var = q > 0.0f ? q : 0.0f;  // maxps(q, 0): NaN gives 0
-    rstd[r] = 1.0f / std::sqrt(var + eps);
-  }
+  const V4 delta4 = Ops::fold4(e[0], e[1], e[2], e[3]) / cf;
+  const V4 sq4 = Ops::fold4(Ops::add(a0[0], a1[0]), Ops::add(a0[1], a1[1]),
+                            Ops::add(a0[2], a1[2]), Ops::add(a0[3], a1[3]));
+  const V4 var4 = Ops::max4((sq4 - (delta4 * delta4) * cf) / cf, V4{});
+  const V4 rstd4 = 1.0f / Ops::sqrt4(var4 + eps);
+  alignas(16) float rstd[4], delta[4];
+  __builtin_memcpy(rstd, &rstd4, sizeof(rstd));
+  __builtin_memcpy(delta, &delta4, sizeof(delta));
 
   // Pass 3: y = ((x - m) - delta) * rstd * gamma + beta.
   const V one = Ops::set1(1.0f);

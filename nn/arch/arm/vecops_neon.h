@@ -14,6 +14,7 @@ namespace {
 struct VecOpsNeon {
   using V = float32x4_t;
   using Mask = int;  // lanes [0, n); NEON has no masked loads
+  using V4 = float32x4_t;  // one float per row of a group of four; GCC operators apply
   static constexpr int kLanes = 4;
 
   static V zero() { return vdupq_n_f32(0.0f); }
@@ -48,15 +49,18 @@ struct VecOpsNeon {
   static V max(V a, V b) { return vmaxq_f32(a, b); }
   static V min(V a, V b) { return vminq_f32(a, b); }
 
-  // out[k] = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + 2,
+  static V4 sqrt4(V4 v) { return vsqrtq_f32(v); }
+  static V4 max4(V4 a, V4 b) { return vmaxq_f32(a, b); }
+
+  // Lane k = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + 2,
   // then the two partials), the order of the x86 folds.
-  static void fold4(V a, V b, V c, V d, float* out) {
+  static V4 fold4(V a, V b, V c, V d) {
     const V ab = vaddq_f32(vcombine_f32(vget_low_f32(a), vget_low_f32(b)),
                            vcombine_f32(vget_high_f32(a), vget_high_f32(b)));
     const V cd = vaddq_f32(vcombine_f32(vget_low_f32(c), vget_low_f32(d)),
                            vcombine_f32(vget_high_f32(c), vget_high_f32(d)));
     // ab = [a0+a2, a1+a3, b0+b2, b1+b3]; pairwise adds finish each row.
-    vst1q_f32(out, vpaddq_f32(ab, cd));
+    return vpaddq_f32(ab, cd);
   }
 };
 

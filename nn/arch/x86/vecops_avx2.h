@@ -12,6 +12,7 @@ namespace {
 struct VecOpsAvx2 {
   using V = __m256;
   using Mask = __m256i;  // lanes [0, n) all ones
+  using V4 = __m128;  // one float per row of a group of four; GCC vector operators apply
   static constexpr int kLanes = 8;
 
   static V zero() { return _mm256_setzero_ps(); }
@@ -37,9 +38,12 @@ struct VecOpsAvx2 {
   static V max(V a, V b) { return _mm256_max_ps(a, b); }
   static V min(V a, V b) { return _mm256_min_ps(a, b); }
 
-  // out[k] = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + half):
+  static V4 sqrt4(V4 v) { return _mm_sqrt_ps(v); }
+  static V4 max4(V4 a, V4 b) { return _mm_max_ps(a, b); }  // b on NaN
+
+  // Lane k = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + half):
   // 256 -> 128 -> 64 -> 32 bits.
-  static void fold4(V a, V b, V c, V d, float* out) {
+  static V4 fold4(V a, V b, V c, V d) {
     const __m256 ab =
         _mm256_add_ps(_mm256_permute2f128_ps(a, b, 0x20), _mm256_permute2f128_ps(a, b, 0x31));
     const __m256 cd =
@@ -50,7 +54,7 @@ struct VecOpsAvx2 {
     // Lanes: [a, c, a, c | b, d, b, d].
     const __m256 t = _mm256_add_ps(_mm256_shuffle_ps(s, s, _MM_SHUFFLE(2, 0, 2, 0)),
                                    _mm256_shuffle_ps(s, s, _MM_SHUFFLE(3, 1, 3, 1)));
-    _mm_storeu_ps(out, _mm_unpacklo_ps(_mm256_castps256_ps128(t), _mm256_extractf128_ps(t, 1)));
+    return _mm_unpacklo_ps(_mm256_castps256_ps128(t), _mm256_extractf128_ps(t, 1));
   }
 };
 

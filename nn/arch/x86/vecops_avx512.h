@@ -18,6 +18,7 @@ namespace {
 struct VecOpsAvx512 {
   using V = __m512;
   using Mask = __mmask16;  // lanes [0, n)
+  using V4 = __m128;  // one float per row of a group of four; GCC vector operators apply
   static constexpr int kLanes = 16;
 
   static V zero() { return _mm512_setzero_ps(); }
@@ -41,9 +42,12 @@ struct VecOpsAvx512 {
   static V max(V a, V b) { return _mm512_max_ps(a, b); }
   static V min(V a, V b) { return _mm512_min_ps(a, b); }
 
-  // out[k] = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + half):
+  static V4 sqrt4(V4 v) { return _mm_sqrt_ps(v); }
+  static V4 max4(V4 a, V4 b) { return _mm_max_ps(a, b); }  // b on NaN
+
+  // Lane k = sum of the lanes of the k-th vector, folded by halves (lane i + lane i + half):
   // 512 -> 256 -> 128 -> 64 -> 32 bits; the four folds share the shuffles.
-  static void fold4(V a, V b, V c, V d, float* out) {
+  static V4 fold4(V a, V b, V c, V d) {
     const __m512 ab = _mm512_add_ps(_mm512_shuffle_f32x4(a, b, _MM_SHUFFLE(1, 0, 1, 0)),
                                     _mm512_shuffle_f32x4(a, b, _MM_SHUFFLE(3, 2, 3, 2)));
     const __m512 cd = _mm512_add_ps(_mm512_shuffle_f32x4(c, d, _MM_SHUFFLE(1, 0, 1, 0)),
@@ -54,7 +58,7 @@ struct VecOpsAvx512 {
     const __m512 t = _mm512_add_ps(s, _mm512_permute_ps(s, _MM_SHUFFLE(1, 0, 3, 2)));
     const __m512 u = _mm512_add_ps(t, _mm512_permute_ps(t, _MM_SHUFFLE(2, 3, 0, 1)));
     const __m512i first = _mm512_setr_epi32(0, 4, 8, 12, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-    _mm_storeu_ps(out, _mm512_castps512_ps128(_mm512_permutexvar_ps(first, u)));
+    return _mm512_castps512_ps128(_mm512_permutexvar_ps(first, u));
   }
 };
 
