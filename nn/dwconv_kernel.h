@@ -1,6 +1,7 @@
-// Interface between nn/dwconv.cpp (validation, packing, threading) and the ISA
-// kernels in dwconv_avx2.cpp / dwconv_avx512.cpp. Plain data and declarations only:
-// the ISA files include it, so it must not define inline functions or templates.
+// Interface between nn/dwconv.cpp (validation, packing, threading) and the ISA kernels
+// (nn/dwconv_block.h, instantiated in nn/arch/*/dwconv_*.cpp). Plain data and
+// declarations only: the ISA files include it, so it must not define inline functions or
+// templates.
 #pragma once
 
 #include <cstddef>
@@ -8,8 +9,8 @@
 namespace nn {
 
 // One depthwise convolution call. Taps are packed [c/L][kh][kw][L] (L = 16 for
-// AVX-512, 8 for AVX2, zero-padded channel tail); bias is [c rounded up to L], zeros
-// where the layer has none.
+// AVX-512, 8 for AVX2, 4 for NEON, zero-padded channel tail); bias is [c rounded up to
+// L], zeros where the layer has none.
 struct DwConvJob {
   const float* in = nullptr;  // NHWC [n, h, w, c]
   float* out = nullptr;       // NHWC [n, oh, ow, c]
@@ -22,7 +23,7 @@ struct DwConvJob {
 };
 
 // Largest kh * kw the kernels accept: one tile's zero-padded input rows live in a
-// fixed stack buffer of kh * kw * 16 floats at the least (64 KiB).
+// fixed stack buffer of at least kh * kw * L floats (64 KiB for AVX-512).
 constexpr int kDwConvMaxTaps = 1024;
 constexpr int kDwConvMaxKernel = 32;
 

@@ -29,7 +29,7 @@ void check_args(const char* who, std::size_t rows, int c, const float* x, std::p
 // Scalar path, the vector kernels' algorithm with eight lanes: partial sums over
 // i mod 8 folded by halves, so rounding grows like theirs rather than like one long
 // chain; provisional mean m, then sums of d = x - m and d^2, and the correction
-// delta = sum(d) / c for the rounding of m (see layernorm_avx512.cpp).
+// delta = sum(d) / c for the rounding of m (see nn/layernorm_rows.h).
 float fold8(const float* s) {
   return ((s[0] + s[4]) + (s[2] + s[6])) + ((s[1] + s[5]) + (s[3] + s[7]));
 }
