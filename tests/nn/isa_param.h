@@ -11,8 +11,8 @@ namespace nntest {
 
 inline std::vector<nn::Isa> supported_isas() {
   std::vector<nn::Isa> out{nn::Isa::Scalar};
-  if (static_cast<int>(nn::detect_isa()) >= static_cast<int>(nn::Isa::Avx2)) out.push_back(nn::Isa::Avx2);
-  if (nn::detect_isa() == nn::Isa::Avx512) out.push_back(nn::Isa::Avx512);
+  for (nn::Isa isa : {nn::Isa::Avx2, nn::Isa::Avx512, nn::Isa::Neon})
+    if (nn::isa_supported(isa)) out.push_back(isa);
   return out;
 }
 
