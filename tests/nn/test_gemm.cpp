@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -223,10 +224,12 @@ TEST_P(GemmUkernelTest, LongK) {
 // Every SIMD kernel (AVX2, AVX-512, NEON) computes each element as one float fused
 // multiply-add per k in increasing k from zero, then the epilogue in float: bit for bit
 // the std::fma chain below, so the ISAs give the same bits as each other. The shapes
-// have row and column tails, K % 4 steps and K blocks. (The scalar kernel multiplies and
-// adds: not this chain.) Only exact epilogue steps here: bias, ReLU, scale, residual.
+// have every row tail up to 15 rows, column tails, K % 4 steps and K blocks. (The scalar
+// kernel multiplies and adds: not this chain.) Only exact epilogue steps here: bias,
+// ReLU, scale, residual.
 TEST(GemmUkernelFma, SimdKernelsAreOneFmaPerKInIncreasingOrder) {
-  const int shapes[][3] = {{13, 37, 7}, {29, 100, 600}, {5, 19, 3100}};
+  std::vector<std::array<int, 3>> shapes = {{29, 100, 600}, {5, 19, 3100}};
+  for (int m = 1; m <= 15; ++m) shapes.push_back({m, 37, 7});
   int checked = 0;
   for (int u = 0; u < nn::gemm_ukernel_count(); ++u) {
     const nn::GemmUkernelInfo& info = nn::gemm_ukernel(u);
