@@ -13,7 +13,7 @@
 // does not change a single bit: every element of C gets the same operation sequence no
 // matter which tile, row split or thread computes it.
 //
-// This header is included by the *_avx2.cpp / *_avx512.cpp files: declarations and plain
+// This header is included by the ISA files (nn/arch/x86, nn/arch/arm): declarations and plain
 // structs only (see cmake/isa.cmake).
 #pragma once
 
@@ -83,6 +83,22 @@ using GemmUkernelFn = void (*)(const GemmTile& tile);
   X(gemm_f32_14x16_avx512, Avx512, 14, 16)  \
   X(gemm_f32_4x24_avx2, Avx2, 4, 24)        \
   X(gemm_f32_6x16_avx2, Avx2, 6, 16)
+#elif defined(__aarch64__)
+// NEON (32 q registers of 4 floats), nn/arch/arm/gemm_neon.cpp. No ARM hardware here:
+// the choice rests on the instruction counts of the compiled K loops (GCC 12, objdump;
+// docs/PERFORMANCE.md), not on timings.
+// - 8x12: 24 accumulators, the most that leave room for the A and W vectors (4 + 3, one
+//   register spare); per 4 K steps 96 fmla by element against 8 A and 24 W loads, 132
+//   instructions, no spill. 12 divides ConvNeXt's widths (96 * 2^k) and most of
+//   MobileNetV3's (24, 48, 72, 96, 120, 240, ...).
+// - 6x16: the same 24 accumulators for the widths where 8x12 pads more than a tenth
+//   (gemm_ukernel_for): N = 16, 32 and the detectors' 64, where 8x12 issues 18 fmla per
+//   row and K step against 16 (the FMA pipes are the bound: about 11 % fewer cycles);
+//   96 fmla against 6 A and 48 W loads per 4 K steps, 144 instructions. From 128 up 8x12's padding is
+//   at most 3 % and it keeps more rows per W load.
+#define NN_GEMM_UKERNELS_ARCH(X)       \
+  X(gemm_f32_8x12_neon, Neon, 8, 12)   \
+  X(gemm_f32_6x16_neon, Neon, 6, 16)
 #else
 #define NN_GEMM_UKERNELS_ARCH(X)
 #endif

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -218,6 +219,68 @@ TEST_P(GemmUkernelTest, LongK) {
   e.scale = true;
   e.residual = Residual::AliasC;
   check_product(GetParam(), 19, 70, 3100, e, 77);
+}
+
+// Every SIMD kernel (AVX2, AVX-512, NEON) computes each element as one float fused
+// multiply-add per k in increasing k from zero, then the epilogue in float: bit for bit
+// the std::fma chain below, so the ISAs give the same bits as each other. The shapes
+// have every row tail up to 15 rows, column tails, K % 4 steps and K blocks. (The scalar
+// kernel multiplies and adds: not this chain.) Only exact epilogue steps here: bias,
+// ReLU, scale, residual.
+TEST(GemmUkernelFma, SimdKernelsAreOneFmaPerKInIncreasingOrder) {
+  std::vector<std::array<int, 3>> shapes = {{29, 100, 600}, {5, 19, 3100}};
+  for (int m = 1; m <= 15; ++m) shapes.push_back({m, 37, 7});
+  int checked = 0;
+  for (int u = 0; u < nn::gemm_ukernel_count(); ++u) {
+    const nn::GemmUkernelInfo& info = nn::gemm_ukernel(u);
+    if (info.isa == nn::Isa::Scalar || !nn::isa_supported(info.isa)) continue;
+    SCOPED_TRACE(info.name);
+    ++checked;
+    unsigned seed = 300;
+    for (const auto& s : shapes) {
+      const int m = s[0], n = s[1], k = s[2];
+      SCOPED_TRACE("m " + std::to_string(m) + " n " + std::to_string(n) + " k " + std::to_string(k));
+      const std::ptrdiff_t lda = k + 3, ldc = n + 1;
+      const std::vector<float> a = random_vector(static_cast<std::size_t>(m) * lda, ++seed);
+      const std::vector<float> w = random_vector(static_cast<std::size_t>(n) * k, ++seed);
+      const std::vector<float> bias = random_vector(n, ++seed);
+      const std::vector<float> scale = random_vector(n, ++seed, -2.0f, 2.0f);
+      const std::vector<float> res = random_vector(static_cast<std::size_t>(m) * ldc, ++seed);
+      const GemmWeights packed = GemmWeights::pack_for_ukernel(w.data(), n, k, u);
+      for (Act act : {Act::None, Act::Relu})
+        for (bool after : {false, true}) {
+          GemmEpilogue ep;
+          ep.bias = bias.data();
+          ep.act = act;
+          ep.scale = scale.data();
+          ep.residual = res.data();
+          ep.ldr = ldc;
+          ep.act_after_residual = after;
+          std::vector<float> c(static_cast<std::size_t>(m) * ldc, -7.0f);
+          nn::gemm(m, a.data(), lda, packed, c.data(), ldc, ep);
+          int failures = 0;
+          for (int i = 0; i < m; ++i)
+            for (int j = 0; j < n; ++j) {
+              float v = 0.0f;
+              for (int kk = 0; kk < k; ++kk)
+                v = std::fma(a[static_cast<std::size_t>(i) * lda + kk],
+                             w[static_cast<std::size_t>(j) * k + kk], v);
+              v = v + bias[j];
+              if (!after) v = nn::act_ref(act, v);
+              v = v * scale[j];
+              v = v + res[static_cast<std::size_t>(i) * ldc + j];
+              if (after) v = nn::act_ref(act, v);
+              const float got = c[static_cast<std::size_t>(i) * ldc + j];
+              if (std::memcmp(&got, &v, sizeof v) != 0 && ++failures <= 5)
+                ADD_FAILURE() << "act " << static_cast<int>(act) << " after " << after << " row " << i
+                              << " col " << j << ": " << got << " vs fma chain " << v;
+            }
+          ASSERT_EQ(failures, 0);
+        }
+    }
+  }
+  // A machine with a SIMD ISA has a kernel for it in the list (x86-64: AVX2; aarch64: NEON).
+  EXPECT_EQ(checked > 0, nn::detect_isa() != nn::Isa::Scalar);
 }
 
 struct DeterminismCase {

@@ -1,0 +1,133 @@
+// NEON element-wise math shared by the activation and GEMM-epilogue kernels, so both
+// produce the same bits. Include only from nn/arch/arm/*.cpp.
+// The same algorithms, coefficients and operation order as nn/arch/x86/vecmath_avx2.h
+// (exp clamped to |x| <= 100, 2^n from the exponent field; GELU from the 8-interval
+// table with a degree-6 polynomial), so the results are those of the AVX2 kernels up to
+// NaN payloads; the table lookup that AVX2 does with vpermps is one vqtbl2q (two 16-byte
+// table registers hold a row of 8 floats) per coefficient.
+// NaN: vminq/vmaxq return NaN when either operand is NaN, so NaN passes every clamp.
+#pragma once
+
+#include <arm_neon.h>
+
+#include <cstdint>
+
+#include "nn/act.h"
+
+namespace nn {
+namespace {
+
+// See nn/arch/x86/vecmath_avx512.h for the fits.
+constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
+                kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
+constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;
+
+inline float32x4_t vq_exp(float32x4_t x) {
+  x = vminq_f32(vdupq_n_f32(100.0f), x);
+  x = vmaxq_f32(vdupq_n_f32(-100.0f), x);
+  const float32x4_t n = vrndnq_f32(vmulq_f32(x, vdupq_n_f32(kLog2e)));  // ties to even
+  // vfmsq_f32(a, b, c) = a - b * c with one rounding: AVX2's fnmadd(b, c, a).
+  float32x4_t r = vfmsq_f32(x, n, vdupq_n_f32(kLn2Hi));
+  r = vfmsq_f32(r, n, vdupq_n_f32(kLn2Lo));
+  // vfmaq_f32(c, a, b) = a * b + c with one rounding: AVX2's fmadd(a, b, c).
+  float32x4_t p = vfmaq_f32(vdupq_n_f32(kExpP3), vdupq_n_f32(kExpP4), r);
+  p = vfmaq_f32(vdupq_n_f32(kExpP2), p, r);
+  p = vfmaq_f32(vdupq_n_f32(kExpP1), p, r);
+  p = vfmaq_f32(vdupq_n_f32(kExpP0), p, r);
+  p = vfmaq_f32(vdupq_n_f32(1.0f), p, r);
+  p = vfmaq_f32(vdupq_n_f32(1.0f), p, r);
+  // 2^n from the exponent field; n clamped to [-127, 128] gives the bit patterns of 0 and
+  // inf at the ends (underflow to zero, overflow to infinity). nc is integral, so the
+  // truncating conversion is exact.
+  const float32x4_t nc =
+      vminq_f32(vmaxq_f32(n, vdupq_n_f32(-127.0f)), vdupq_n_f32(128.0f));
+  const int32x4_t bits = vshlq_n_s32(vaddq_s32(vcvtq_s32_f32(nc), vdupq_n_s32(127)), 23);
+  return vmulq_f32(p, vreinterpretq_f32_s32(bits));
+}
+
+// h(a) = Phi(-a) on [0, 6): 8 intervals of width 3/4, a degree-6 polynomial in
+// u = a * 4/3 - 0.5 - i per interval i: the table of nn/arch/x86/vecmath_avx2.h.
+alignas(16) constexpr float kGeluTable8[7][8] = {
+    {0.353830218f, 0.130294532f, 0.0303963646f, 0.00433244929f, 0.000369078683f,
+     1.85367535e-05f, 5.44038755e-07f, 9.27496302e-09f},
+    {-0.278891265f, -0.158907637f, -0.0515897088f, -0.00954308826f, -0.0010058406f,
+     -6.04102061e-05f, -2.06773188e-06f, -4.0346201e-08f},
+    {0.0392201766f, 0.0670387f, 0.036274083f, 0.00939403474f, 0.00127300539f,
+     9.34398486e-05f, 3.77916899e-06f, 8.50568966e-08f},
+    {0.022466151f, -0.00395167386f, -0.012166841f, -0.00527177891f, -0.000979768345f,
+     -9.05413181e-05f, -4.38679581e-06f, -1.14271984e-07f},
+    {-0.00526561122f, -0.00544611132f, 0.00087547343f, 0.00171325111f, 0.000500864408f,
+     6.13693774e-05f, 3.66778431e-06f, 1.13190168e-07f},
+    {-0.00156722416f, 0.00120694831f, 0.000779021415f, -0.00021681338f, -0.000171171647f,
+     -3.15746765e-05f, -2.51333267e-06f, -9.82732615e-08f},
+    {0.000481751194f, 0.000221013193f, -0.000240751688f, -5.43378774e-05f, 3.35252989e-05f,
+     1.12106572e-05f, 1.20260199e-06f, 5.78770916e-08f},
+};
+
+// Entry `bytes` (4 byte indices per lane) of table row j.
+inline float32x4_t gelu_coeff(int j, uint8x16_t bytes) {
+  const uint8_t* row = reinterpret_cast<const uint8_t*>(kGeluTable8[j]);
+  const uint8x16x2_t tab = {{vld1q_u8(row), vld1q_u8(row + 16)}};
+  return vreinterpretq_f32_u8(vqtbl2q_u8(tab, bytes));
+}
+
+// gelu(x) = x * Phi(x); see v512_gelu in nn/arch/x86/vecmath_avx512.h.
+inline float32x4_t vq_gelu(float32x4_t x) {
+  const float32x4_t a = vabsq_f32(x);
+  float32x4_t t = vfmaq_f32(vdupq_n_f32(-0.5f), a, vdupq_n_f32(8.0f / 6.0f));
+  t = vminq_f32(t, vdupq_n_f32(7.49999952f));
+  // Adding 1.5 * 2^23 rounds t to an integer held in the low mantissa bits.
+  const float32x4_t magic = vdupq_n_f32(12582912.0f);
+  const float32x4_t rounded = vaddq_f32(t, magic);
+  const uint32x4_t idx = vandq_u32(vreinterpretq_u32_f32(rounded), vdupq_n_u32(7));
+  const float32x4_t u = vsubq_f32(t, vsubq_f32(rounded, magic));
+  // Lane i's float i spans bytes 4 idx .. 4 idx + 3 of the 32-byte row.
+  const uint8x16_t bytes = vreinterpretq_u8_u32(
+      vaddq_u32(vmulq_n_u32(idx, 0x04040404u), vdupq_n_u32(0x03020100u)));
+  float32x4_t h = gelu_coeff(6, bytes);
+  for (int j = 5; j >= 0; --j) h = vfmaq_f32(gelu_coeff(j, bytes), h, u);
+  h = vreinterpretq_f32_u32(
+      vandq_u32(vreinterpretq_u32_f32(h), vcltq_f32(a, vdupq_n_f32(6.0f))));
+  const float32x4_t one_minus_h = vsubq_f32(vdupq_n_f32(1.0f), h);
+  // Phi(x) = h(|x|) where the sign bit of x is set (AVX2's blendv on x).
+  const uint32x4_t negative =
+      vreinterpretq_u32_s32(vshrq_n_s32(vreinterpretq_s32_f32(x), 31));
+  const float32x4_t phi = vbslq_f32(negative, h, one_minus_h);
+  return vmulq_f32(x, phi);
+}
+
+inline float32x4_t vq_sigmoid(float32x4_t x) {
+  const float32x4_t e = vq_exp(vnegq_f32(x));
+  return vdivq_f32(vdupq_n_f32(1.0f), vaddq_f32(vdupq_n_f32(1.0f), e));
+}
+
+// x < 0 ? 0 : x, like torch.relu: keeps NaN and -0.
+inline float32x4_t vq_relu(float32x4_t x) {
+  return vreinterpretq_f32_u32(vbicq_u32(vreinterpretq_u32_f32(x), vcltzq_f32(x)));
+}
+
+inline float32x4_t vq_relu6_shift3(float32x4_t x) {
+  const float32x4_t t = vmaxq_f32(vdupq_n_f32(0.0f), vaddq_f32(x, vdupq_n_f32(3.0f)));
+  return vminq_f32(vdupq_n_f32(6.0f), t);
+}
+
+inline float32x4_t vq_hardsigmoid(float32x4_t x) {
+  return vdivq_f32(vq_relu6_shift3(x), vdupq_n_f32(6.0f));
+}
+
+inline float32x4_t vq_hardswish(float32x4_t x) {
+  return vdivq_f32(vmulq_f32(x, vq_relu6_shift3(x)), vdupq_n_f32(6.0f));
+}
+
+template <Act ACT>
+inline float32x4_t vq_act(float32x4_t x) {
+  if constexpr (ACT == Act::Relu) return vq_relu(x);
+  else if constexpr (ACT == Act::Gelu) return vq_gelu(x);
+  else if constexpr (ACT == Act::HardSwish) return vq_hardswish(x);
+  else if constexpr (ACT == Act::HardSigmoid) return vq_hardsigmoid(x);
+  else if constexpr (ACT == Act::Sigmoid) return vq_sigmoid(x);
+  else return x;
+}
+
+}  // namespace
+}  // namespace nn
