@@ -1,4 +1,5 @@
-// Runs a parameterised test once per ISA this machine supports.
+// Runs a parameterised test once per ISA this build and machine support: scalar plus
+// AVX2 and AVX-512 on x86-64, scalar plus NEON on aarch64.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,9 +11,9 @@
 namespace nntest {
 
 inline std::vector<nn::Isa> supported_isas() {
-  std::vector<nn::Isa> out{nn::Isa::Scalar};
-  if (static_cast<int>(nn::detect_isa()) >= static_cast<int>(nn::Isa::Avx2)) out.push_back(nn::Isa::Avx2);
-  if (nn::detect_isa() == nn::Isa::Avx512) out.push_back(nn::Isa::Avx512);
+  std::vector<nn::Isa> out;
+  for (nn::Isa isa : {nn::Isa::Scalar, nn::Isa::Avx2, nn::Isa::Avx512, nn::Isa::Neon})
+    if (nn::isa_supported(isa)) out.push_back(isa);
   return out;
 }
 
