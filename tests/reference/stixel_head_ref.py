@@ -5,7 +5,8 @@ feature rows -> stixel head) for every head variant (modules: weights/torch_mode
   stixel_case_<variant>_<size>.safetensors   'input' [1,3,H,W], 'expected' [1,A,64,U]
                                              (v4 also 'authors_d' [64,U]: see authors_depths)
 Variants: v4 (latest), v1 (local column attention), v3 (global), v2 (attention unused),
-v0 (plain reduce). Sizes: fullhd (1280x1920, U = 240) and small (256x640, U = 80)."""
+v0 (plain reduce). Sizes: fullhd (1280x1920, U = 240) and small (256x640, U = 80); with
+ROADNN_TEST_SIZES=small only small."""
 import sys
 
 import refcommon
@@ -40,7 +41,7 @@ def main():
     backbone.eval()
     feats = {}
     for size, (h, w, _) in SIZES.items():
-        if only and not any(o.endswith(size) for o in only):
+        if (only and not any(o.endswith(size) for o in only)) or (refcommon.small_sizes() and size != "small"):
             continue
         x = torch.rand((1, 3, h, w), generator=torch.Generator().manual_seed(h + w)) * 255.0
         with torch.no_grad():

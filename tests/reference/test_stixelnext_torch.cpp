@@ -18,6 +18,9 @@ constexpr double kTol = 1e-5;
 
 void check(const std::string& variant, const std::string& size, nn::StixelHeadVariant expect,
            std::optional<nn::StixelHeadVariant> force = std::nullopt) {
+  if (size != "small") {
+    ROADNN_SKIP_LARGE_INPUT();
+  }
   weights::SafeTensors w = reftest::load_ref("stixel_" + variant + "_weights.safetensors");
   weights::SafeTensors c = reftest::load_ref("stixel_case_" + variant + "_" + size + ".safetensors");
   nn::StixelNExT model(w, force);
@@ -169,6 +172,9 @@ TEST(StixelNExTTorch, ExtractionV0MatchesTorch) { check_extraction("v0", 0.36); 
 // same image), every candidate's d is the authors' decoding bit for bit
 // (numpy float64 exp(log(anchor) + d_res), computed by stixel_head_ref.py).
 void check_authors_depths(const std::string& size, int H, int U) {
+  if (size != "small") {
+    ROADNN_SKIP_LARGE_INPUT();
+  }
   weights::SafeTensors c = reftest::load_ref("stixel_case_v4_" + size + ".safetensors");
   const auto prediction = c.f32("expected");
   const auto authors = c.f32("authors_d");
