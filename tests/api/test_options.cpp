@@ -110,10 +110,20 @@ struct IsaCase {
   nn::Isa engine;
 };
 
+// Scalar, each vector ISA of this build's architecture the CPU has, the other
+// architecture's level-1 name (a cap is a level: neon on x86-64 runs AVX2, avx2 on
+// aarch64 runs NEON) and the default.
 std::vector<IsaCase> isa_cases() {
   std::vector<IsaCase> c = {{ROADNN_ISA_SCALAR, nn::Isa::Scalar}};
-  if (nn::detect_isa() >= nn::Isa::Avx2) c.push_back({ROADNN_ISA_AVX2, nn::Isa::Avx2});
-  if (nn::detect_isa() >= nn::Isa::Avx512) c.push_back({ROADNN_ISA_AVX512, nn::Isa::Avx512});
+  const IsaCase vector_caps[] = {
+      {ROADNN_ISA_AVX2, nn::Isa::Avx2}, {ROADNN_ISA_AVX512, nn::Isa::Avx512}, {ROADNN_ISA_NEON, nn::Isa::Neon}};
+  for (const IsaCase& v : vector_caps)
+    if (nn::isa_supported(v.engine)) c.push_back(v);
+#if defined(__aarch64__)
+  if (nn::isa_supported(nn::Isa::Neon)) c.push_back({ROADNN_ISA_AVX2, nn::Isa::Neon});
+#elif defined(__x86_64__)
+  if (nn::isa_supported(nn::Isa::Avx2)) c.push_back({ROADNN_ISA_NEON, nn::Isa::Avx2});
+#endif
   c.push_back({ROADNN_ISA_BEST, nn::detect_isa()});
   return c;
 }
@@ -145,9 +155,27 @@ TEST(ApiOptions, ConvNeXtIsaCapsPerModelInOneProcess) {
       }
   // The scalar path is not the vector one bit for bit, so a cap leaking from one
   // model into another would show above.
-  if (cases.size() > 2) {
+  if (nn::detect_isa() != nn::Isa::Scalar) {
     EXPECT_FALSE(same_floats(want[0][0], want.back()[0])) << "scalar and best give the same bits";
   }
+}
+
+// roadnn_model_info.kernels names the set that runs: by default the architecture's
+// vector ISA (NEON on every aarch64 CPU), "scalar" when capped so.
+TEST(ApiOptions, ReportedKernelsAreTheArchitecturesDefault) {
+  ModelPtr best = load_convnext();
+  ASSERT_NE(best.get(), nullptr);
+  EXPECT_EQ(kernels_of(best.get()), nn::isa_name(nn::detect_isa()));
+#if defined(__aarch64__)
+  EXPECT_EQ(kernels_of(best.get()), "neon");
+#elif defined(__x86_64__)
+  EXPECT_NE(kernels_of(best.get()), "neon");
+#endif
+  roadnn_model_params p = params(ROADNN_MODEL_CONVNEXT);
+  p.max_isa = ROADNN_ISA_SCALAR;
+  ModelPtr scalar = load_convnext(p);
+  ASSERT_NE(scalar.get(), nullptr);
+  EXPECT_EQ(kernels_of(scalar.get()), "scalar");
 }
 
 TEST(ApiOptions, StixelIsaCapsGiveTheEnginePipeline) {

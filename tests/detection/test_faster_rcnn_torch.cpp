@@ -16,10 +16,23 @@ namespace {
 using nn::detection::FasterRcnn;
 using nn::detection::FasterRcnnVariant;
 
+// 720p and odd (457x613) are large inputs (each model resizes them to its own 800 or
+// 320 short side); "small" is 180x240 at a transform size of 240 / 320 that the case
+// file records, the one case of ROADNN_TEST_SIZES=small.
 void check_case(const std::string& key, FasterRcnnVariant v, const std::string& case_name) {
+  if (case_name != "small") {
+    ROADNN_SKIP_LARGE_INPUT();
+  }
   weights::SafeTensors w = reftest::load_ref("det_" + key + "_weights.safetensors");
   weights::SafeTensors c = reftest::load_ref("det_" + key + "_" + case_name + ".safetensors");
-  FasterRcnn model(w, v);
+  nn::detection::FasterRcnnConfig cfg = nn::detection::faster_rcnn_defaults(v);
+  if (c.has("transform_size")) {
+    const auto sizes = c.i64("transform_size");
+    ASSERT_EQ(sizes.size(), 2u);
+    cfg.transform.min_size = static_cast<int>(sizes[0]);
+    cfg.transform.max_size = static_cast<int>(sizes[1]);
+  }
+  FasterRcnn model(w, v, cfg);
   EXPECT_EQ(model.num_classes(), 3);
   const auto& in_shape = c.info("input").shape;
   const int h = static_cast<int>(in_shape[2]), wd = static_cast<int>(in_shape[3]);
@@ -74,6 +87,9 @@ TEST(FasterRcnnTorch, MobileNetV3LargeFpn720p) { check_case("mnv3", FasterRcnnVa
 TEST(FasterRcnnTorch, MobileNetV3LargeFpnOdd457x613) {
   check_case("mnv3", FasterRcnnVariant::MobileNetV3LargeFpn, "odd");
 }
+TEST(FasterRcnnTorch, MobileNetV3LargeFpnSmall180x240) {
+  check_case("mnv3", FasterRcnnVariant::MobileNetV3LargeFpn, "small");
+}
 
 }  // namespace
 
@@ -85,6 +101,9 @@ TEST(FasterRcnnTorch, MobileNetV3Large320Fpn720p) {
 TEST(FasterRcnnTorch, MobileNetV3Large320FpnOdd457x613) {
   check_case("mnv3_320", FasterRcnnVariant::MobileNetV3Large320Fpn, "odd");
 }
+TEST(FasterRcnnTorch, MobileNetV3Large320FpnSmall180x240) {
+  check_case("mnv3_320", FasterRcnnVariant::MobileNetV3Large320Fpn, "small");
+}
 
 }  // namespace
 
@@ -92,11 +111,13 @@ namespace {
 
 TEST(FasterRcnnTorch, ResNet50Fpn720p) { check_case("r50", FasterRcnnVariant::ResNet50Fpn, "720p"); }
 TEST(FasterRcnnTorch, ResNet50FpnOdd457x613) { check_case("r50", FasterRcnnVariant::ResNet50Fpn, "odd"); }
+TEST(FasterRcnnTorch, ResNet50FpnSmall180x240) { check_case("r50", FasterRcnnVariant::ResNet50Fpn, "small"); }
 
 // Bitwise the same detections for 1 and 2 threads.
 TEST(FasterRcnnTorch, DeterministicAcrossThreadCounts) {
   weights::SafeTensors w = reftest::load_ref("det_mnv3_320_weights.safetensors");
-  weights::SafeTensors c = reftest::load_ref("det_mnv3_320_odd.safetensors");
+  weights::SafeTensors c =
+      reftest::load_ref(reftest::small_sizes_only() ? "det_mnv3_320_small.safetensors" : "det_mnv3_320_odd.safetensors");
   FasterRcnn model(w, FasterRcnnVariant::MobileNetV3Large320Fpn);
   const auto& s = c.info("input").shape;
   model.plan(static_cast<int>(s[2]), static_cast<int>(s[3]));

@@ -47,7 +47,7 @@ struct Variant {
 std::vector<Variant> supported_variants() {
   std::vector<Variant> out;
   for (int i = 0; i < nn::gemm_ukernel_count(); ++i)
-    if (static_cast<int>(nn::gemm_ukernel(i).isa) <= static_cast<int>(nn::detect_isa()))
+    if (nn::isa_supported(nn::gemm_ukernel(i).isa))
       out.push_back({i, nn::gemm_ukernel(i).mr, nn::gemm_ukernel(i).name});
   if (nn::bf16_gemm_available()) out.push_back({-1, 8, nn::gemm_bf16_kernel_name()});
   return out;

@@ -15,6 +15,7 @@
 #include "nn/activation.h"
 #include "nn/conv2d.h"
 #include "nn/error.h"
+#include "nn/kernel_table.h"
 #include "nn/threads.h"
 #include "nn/winograd.h"
 #include "nn/winograd_kernel.h"
@@ -45,8 +46,9 @@ struct IsaKernels {
 std::vector<IsaKernels> simd_kernels() {
   std::vector<IsaKernels> out;
   for (nn::Isa isa : nntest::supported_isas()) {
-    if (isa == nn::Isa::Avx2) out.push_back({isa, nn::winograd_input_tile_avx2, nn::winograd_output_tile_avx2});
-    if (isa == nn::Isa::Avx512) out.push_back({isa, nn::winograd_input_tile_avx512, nn::winograd_output_tile_avx512});
+    if (isa == nn::Isa::Scalar) continue;
+    const nn::KernelTable& t = nn::kernel_table(isa);
+    out.push_back({isa, t.winograd_input_tile, t.winograd_output_tile});
   }
   return out;
 }

@@ -6,8 +6,9 @@ Writes into --out:
   convnext_small_cfg_weights.safetensors   an odd-width 4-stage config (features.* only)
   convnext_case_<name>.safetensors     'input' [N,3,H,W] and 'expected' (model.features(input))
 Cases: tiny_224 (1x3x224x224), tiny_odd (1x3x200x328), tiny_batch2 (2x3x224x224),
-tiny_fullhd (1x3x1280x1920, raw 0..255 pixels as StixelNExT++ feeds them), odd_cfg (1x3x100x132).
-Pass case names to limit what is generated."""
+tiny_fullhd (1x3x1280x1920, raw 0..255 pixels as StixelNExT++ feeds them), tiny_small
+(1x3x64x96), odd_cfg (1x3x100x132); with ROADNN_TEST_SIZES=small only the small ones
+(SMALL_CASES). Pass case names to limit what is generated."""
 import sys
 import time
 import zlib
@@ -21,8 +22,10 @@ CASES = {
     "tiny_odd": ("tiny", (1, 3, 200, 328), "normal"),
     "tiny_batch2": ("tiny", (2, 3, 224, 224), "normal"),
     "tiny_fullhd": ("tiny", (1, 3, 1280, 1920), "raw255"),
+    "tiny_small": ("tiny", (1, 3, 64, 96), "normal"),
     "odd_cfg": ("odd", (1, 3, 100, 132), "normal"),
 }
+SMALL_CASES = ("tiny_small", "odd_cfg")
 
 
 def build(torch, kind):
@@ -40,7 +43,7 @@ def main():
     torch = refcommon.import_torch()
     models = {}
     for name, (kind, shape, inp) in CASES.items():
-        if only and name not in only:
+        if (only and name not in only) or (refcommon.small_sizes() and name not in SMALL_CASES):
             continue
         if kind not in models:
             models[kind] = build(torch, kind)

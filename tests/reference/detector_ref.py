@@ -5,7 +5,11 @@ Writes into --out:
   det_<model>_weights.safetensors   state_dict with seeded random weights (3 classes),
                                     batch-norm running statistics randomised too
   det_<model>_<case>.safetensors    'input' [1,3,H,W] in [0,1]; 'transformed' [1,3,Hp,Wp];
-                                    'proposals' [P,4]; 'boxes' [K,4], 'scores' [K], 'labels' [K]
+                                    'proposals' [P,4]; 'boxes' [K,4], 'scores' [K], 'labels' [K];
+                                    the small case also 'transform_size' [min_size, max_size]
+Cases: 720p and odd (457x613) at each model's own transform size (800 / 1333, 320 / 640 for
+the 320 model); small (180x240 upscaled to 240x320 by a transform of min_size 240, max_size
+320: the same weights and code on a small image). ROADNN_TEST_SIZES=small: only small.
 Random weights make the RPN and class scores arbitrary; calibrate() spreads them so the
 default thresholds (RPN 0.05, box 0.05) leave hundreds of proposals and real detections."""
 import sys
@@ -19,7 +23,9 @@ MODELS = {
     "mnv3_320": "fasterrcnn_mobilenet_v3_large_320_fpn",
     "r50": "fasterrcnn_resnet50_fpn",
 }
-CASES = {"720p": (720, 1280), "odd": (457, 613)}
+CASES = {"720p": (720, 1280), "odd": (457, 613), "small": (180, 240)}
+# Cases run with another transform size than the model's default: (min_size, max_size).
+TRANSFORM_SIZES = {"small": (240, 320)}
 
 
 def build(torch, builder, seed, num_classes=3):
@@ -77,8 +83,13 @@ def main():
         model = build(torch, builder, seed=4242)
         calibrate(torch, model, make_input(torch, "720p", *CASES["720p"]))
         refcommon.save(f"{out}/det_{key}_weights.safetensors", model.state_dict())
+        default_sizes = (model.transform.min_size, model.transform.max_size)
         for case, (h, w) in CASES.items():
+            if refcommon.small_sizes() and case not in TRANSFORM_SIZES:
+                continue
             x = make_input(torch, case, h, w)
+            sizes = TRANSFORM_SIZES.get(case)
+            model.transform.min_size, model.transform.max_size = ((sizes[0],), sizes[1]) if sizes else default_sizes
             with torch.no_grad():
                 images, _ = model.transform([x[0]])
                 features = model.backbone(images.tensors)
@@ -90,9 +101,11 @@ def main():
             s = det["scores"]
             print(f"{key}/{case}: transformed {list(images.tensors.shape)}, {proposals[0].shape[0]} proposals, "
                   f"{s.shape[0]} detections, scores {float(s.min()) if len(s) else 0:.3f}..{float(s.max()) if len(s) else 0:.3f}")
-            refcommon.save(f"{out}/det_{key}_{case}.safetensors", {
-                "input": x, "transformed": images.tensors, "proposals": proposals[0],
-                "boxes": det["boxes"], "scores": det["scores"], "labels": det["labels"]})
+            tensors = {"input": x, "transformed": images.tensors, "proposals": proposals[0],
+                       "boxes": det["boxes"], "scores": det["scores"], "labels": det["labels"]}
+            if sizes:
+                tensors["transform_size"] = torch.tensor(sizes, dtype=torch.int64)
+            refcommon.save(f"{out}/det_{key}_{case}.safetensors", tensors)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,9 @@ Writes into --out:
   d2_weights_from_pkl.safetensors  the .pkl converted the same way
   d2_<case>.safetensors        'input' U8 [H,W,3] RGB; 'resized' U8 [h,w,3]; 'proposals'
                                [P,4] (resized pixels), 'proposal_logits' [P]; 'boxes' [K,4],
-                               'scores' [K], 'classes' I64 [K] (0-based, original pixels)
+                               'scores' [K], 'classes' I64 [K] (0-based, original pixels);
+                               the small case also 'transform_size' [min_size, max_size]
+ROADNN_TEST_SIZES=small: only the small case.
 """
 import collections
 import math
@@ -33,7 +35,10 @@ import refcommon
 
 # 720p upscales to 750x1333, 1080p downscales (antialiased) to 750x1333, 500x740
 # becomes 800x1184, padded 800x1184: P5 25x37 and P6 13x19, both odd.
-CASES = {"720p": (720, 1280), "1080p": (1080, 1920), "odd": (500, 740)}
+# small: 180x240 upscaled to 240x320 by MIN_SIZE_TEST 240, MAX_SIZE_TEST 320 (the same
+# weights and code on a small image, for the emulated aarch64 run).
+CASES = {"720p": (720, 1280), "1080p": (1080, 1920), "odd": (500, 740), "small": (180, 240)}
+TRANSFORM_SIZES = {"small": (240, 320)}  # (min_size, max_size) of cases not at 800 / 1333
 MEAN_BGR = (103.530, 116.280, 123.675)
 BLOCKS = (3, 4, 6, 3)
 CLASSES = 2  # foreground classes K
@@ -122,6 +127,7 @@ class Detectron2:
     def __init__(self, torch, sd):
         self.t, self.sd = torch, sd
         self.F = torch.nn.functional
+        self.sizes = (800, 1333)  # INPUT.MIN_SIZE_TEST, MAX_SIZE_TEST
 
     def conv_bn(self, x, name, stride=1, pad=0, relu=True):
         F, sd = self.F, self.sd
@@ -273,7 +279,7 @@ class Detectron2:
         """GeneralizedRCNN.preprocess_image after the mapper: the Pillow resize, BGR,
         normalisation, zero padding to a multiple of 32."""
         torch, F = self.t, self.F
-        h, w = output_size(*rgb.shape[:2])
+        h, w = output_size(*rgb.shape[:2], *self.sizes)
         resized = pil_resize(rgb, h, w)
         x = torch.as_tensor(np.ascontiguousarray(resized[:, :, ::-1]).astype(np.float32)).permute(2, 0, 1)
         x = (x - torch.tensor(MEAN_BGR).view(3, 1, 1)) / torch.tensor([1.0, 1.0, 1.0]).view(3, 1, 1)
@@ -378,19 +384,24 @@ def main():
     subprocess.run([sys.executable, export, f"{out}/d2_model_final_numpy.pkl", f"{out}/d2_weights_from_pkl.safetensors"],
                    check=True)
     for case, (h, w) in CASES.items():
+        if refcommon.small_sizes() and case not in TRANSFORM_SIZES:
+            continue
         rgb = make_input(torch, case, h, w)
+        model.sizes = TRANSFORM_SIZES.get(case, (800, 1333))
         with torch.no_grad():
             r = model(rgb)
-        oh, ow = output_size(h, w)
+        oh, ow = output_size(h, w, *model.sizes)
         assert np.array_equal(pillow_resize_ref.resize(rgb, oh, ow), r["resized"]), case
         s = r["scores"]
         print(f"d2/{case}: resized {r['resized'].shape[:2]}, {r['proposals'].shape[0]} proposals, "
               f"{s.shape[0]} detections, scores {float(s.min()) if len(s) else 0:.3f}.."
               f"{float(s.max()) if len(s) else 0:.3f}")
-        refcommon.save(f"{out}/d2_{case}.safetensors", {
-            "input": rgb, "resized": r["resized"], "proposals": r["proposals"],
-            "proposal_logits": r["proposal_logits"], "boxes": r["boxes"], "scores": r["scores"],
-            "classes": r["classes"]})
+        tensors = {"input": rgb, "resized": r["resized"], "proposals": r["proposals"],
+                   "proposal_logits": r["proposal_logits"], "boxes": r["boxes"], "scores": r["scores"],
+                   "classes": r["classes"]}
+        if case in TRANSFORM_SIZES:
+            tensors["transform_size"] = np.array(TRANSFORM_SIZES[case], dtype=np.int64)
+        refcommon.save(f"{out}/d2_{case}.safetensors", tensors)
 
 
 if __name__ == "__main__":

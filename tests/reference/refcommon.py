@@ -55,6 +55,13 @@ def save(path, tensors, metadata=None):
                                for k, v in tensors.items()}, metadata or {})
 
 
+def small_sizes():
+    """ROADNN_TEST_SIZES=small (CMake sets it on every test of a cross build, whose tests
+    run under emulation; docs/ENGINEERING.md): write only the cases the tests run at small
+    sizes (the tests of large inputs skip and say so)."""
+    return os.environ.get("ROADNN_TEST_SIZES", "full") == "small"
+
+
 def out_dir(argv):
     import argparse
     ap = argparse.ArgumentParser()

@@ -5,13 +5,16 @@ feature rows -> stixel head) for every head variant (modules: weights/torch_mode
   stixel_case_<variant>_<size>.safetensors   'input' [1,3,H,W], 'expected' [1,A,64,U]
                                              (v4 also 'authors_d' [64,U]: see authors_depths)
 Variants: v4 (latest), v1 (local column attention), v3 (global), v2 (attention unused),
-v0 (plain reduce). Sizes: fullhd (1280x1920, U = 240) and small (256x640, U = 80)."""
+v0 (plain reduce). Sizes: fullhd (1280x1920, U = 240) and small (256x640, U = 80); with
+ROADNN_TEST_SIZES=small only small, at 64x160, U = 20."""
 import sys
 
 import refcommon
 import torch_models  # weights/, on the path through refcommon
 
 SIZES = {"small": (256, 640, 80), "fullhd": (1280, 1920, 240)}
+if refcommon.small_sizes():  # under emulation (test_stixelnext_torch.cpp's small_size())
+    SIZES = {"small": (64, 160, 20)}
 VARIANTS = ("v4", "v1", "v3", "v2", "v0")
 
 

@@ -16,8 +16,18 @@ namespace {
 
 constexpr double kTol = 1e-5;
 
+// The "small" case's input H x W and columns U (stixel_head_ref.py): 256x640, U = 80; in
+// the small-size run (ROADNN_TEST_SIZES=small, under emulation) 64x160, U = 20.
+struct SmallSize {
+  int h, w, u;
+};
+SmallSize small_size() { return reftest::small_sizes_only() ? SmallSize{64, 160, 20} : SmallSize{256, 640, 80}; }
+
 void check(const std::string& variant, const std::string& size, nn::StixelHeadVariant expect,
            std::optional<nn::StixelHeadVariant> force = std::nullopt) {
+  if (size != "small") {
+    ROADNN_SKIP_LARGE_INPUT();
+  }
   weights::SafeTensors w = reftest::load_ref("stixel_" + variant + "_weights.safetensors");
   weights::SafeTensors c = reftest::load_ref("stixel_case_" + variant + "_" + size + ".safetensors");
   nn::StixelNExT model(w, force);
@@ -49,9 +59,9 @@ TEST(StixelNExTTorch, V1AndV3DifferOnlyByTheForcedVariant) {
   weights::SafeTensors c = reftest::load_ref("stixel_case_v1_small.safetensors");
   nn::StixelNExT local(w), global(w, V::V3);
   const auto x = c.f32("input");
-  local.plan(1, 256, 640, 80);
-  global.plan(1, 256, 640, 80);
-  const std::size_t n = 3 * 64 * 80;
+  local.plan(1, small_size().h, small_size().w, small_size().u);
+  global.plan(1, small_size().h, small_size().w, small_size().u);
+  const std::size_t n = 3 * 64 * static_cast<std::size_t>(small_size().u);
   std::vector<float> a(local.forward(x.data()), local.forward(x.data()) + n);
   const float* b = global.forward(x.data());
   EXPECT_NE(0, std::memcmp(a.data(), b, n * sizeof(float)));
@@ -82,14 +92,14 @@ TEST(StixelNExTTorch, DeterministicAcrossThreadCounts) {
   weights::SafeTensors w = reftest::load_ref("stixel_v4_weights.safetensors");
   weights::SafeTensors c = reftest::load_ref("stixel_case_v4_small.safetensors");
   const auto x = c.f32("input");
-  const std::size_t n = 4 * 64 * 80;
+  const std::size_t n = 4 * 64 * static_cast<std::size_t>(small_size().u);
   nn::set_num_threads(1);
   nn::StixelNExT one(w);
-  one.plan(1, 256, 640, 80);
+  one.plan(1, small_size().h, small_size().w, small_size().u);
   std::vector<float> a(one.forward(x.data()), one.forward(x.data()) + n);
   nn::set_num_threads(2);
   nn::StixelNExT two(w);
-  two.plan(1, 256, 640, 80);
+  two.plan(1, small_size().h, small_size().w, small_size().u);
   const float* b = two.forward(x.data());
   nn::set_num_threads(0);
   EXPECT_EQ(0, std::memcmp(a.data(), b, n * sizeof(float)));
@@ -110,11 +120,11 @@ void check_extraction(const std::string& variant, double threshold) {
   weights::SafeTensors w = reftest::load_ref("stixel_" + variant + "_weights.safetensors");
   weights::SafeTensors c = reftest::load_ref("stixel_case_" + variant + "_small.safetensors");
   nn::StixelNExT model(w);
-  model.plan(1, 256, 640, 80);
+  model.plan(1, small_size().h, small_size().w, small_size().u);
   const auto x = c.f32("input");
   const float* ours = model.forward(x.data());
   const auto theirs = c.f32("expected");
-  const int attrs = model.head().attributes(), n = 64, u = 80, H = 256;
+  const int attrs = model.head().attributes(), n = 64, u = small_size().u, H = small_size().h;
   stixel::ExtractOptions opt;
   opt.threshold = threshold;
   opt.image_height = H;
@@ -169,6 +179,9 @@ TEST(StixelNExTTorch, ExtractionV0MatchesTorch) { check_extraction("v0", 0.36); 
 // same image), every candidate's d is the authors' decoding bit for bit
 // (numpy float64 exp(log(anchor) + d_res), computed by stixel_head_ref.py).
 void check_authors_depths(const std::string& size, int H, int U) {
+  if (size != "small") {
+    ROADNN_SKIP_LARGE_INPUT();
+  }
   weights::SafeTensors c = reftest::load_ref("stixel_case_v4_" + size + ".safetensors");
   const auto prediction = c.f32("expected");
   const auto authors = c.f32("authors_d");
@@ -192,7 +205,7 @@ void check_authors_depths(const std::string& size, int H, int U) {
   EXPECT_EQ(differ, 0u);
 }
 
-TEST(StixelNExTTorch, DepthIsTheAuthorsDecodingBitForBitSmall) { check_authors_depths("small", 256, 80); }
+TEST(StixelNExTTorch, DepthIsTheAuthorsDecodingBitForBitSmall) { check_authors_depths("small", small_size().h, small_size().u); }
 TEST(StixelNExTTorch, DepthIsTheAuthorsDecodingBitForBitFullHd) { check_authors_depths("fullhd", 1280, 240); }
 
 }  // namespace
