@@ -18,6 +18,13 @@
   GTEST_SKIP() << "large input: not part of the small-size run (ROADNN_TEST_SIZES=small, "    \
                   "the cross build's emulated tests)"
 
+// In a test the small-size run leaves to the host suites because of its cost under
+// emulation, not its input size: skip, saying why and what covers its kernels there.
+#define ROADNN_SKIP_IN_SMALL_RUN(why)                                                          \
+  if (reftest::small_sizes_only())                                                             \
+  GTEST_SKIP() << "left to the host suites in the small-size run (ROADNN_TEST_SIZES=small): " \
+               << why
+
 namespace reftest {
 
 // ROADNN_TEST_SIZES=small, which CMake sets on every test of a cross build (its tests run
