@@ -33,7 +33,7 @@ KernelTable avx512_table() {
   KernelTable t = {
       Isa::Avx512,           16,
       apply_act_avx512,      layernorm_rows_avx512,
-      dwconv_block_avx512,   resize_bilinear_row_avx2,  // gathers: no wider form measured faster
+      dwconv_block_avx512,   resize_bilinear_row_avx2,  // AVX2 rows here and for the disparity: no AVX-512 form
       winograd_input_tile_avx512, winograd_output_tile_avx512,
       detection::roi_bin_avx512,  disparity_row_avx2,
       peak_fma_avx512,       nullptr,
