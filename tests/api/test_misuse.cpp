@@ -255,7 +255,7 @@ TEST(ApiMisuse, BadModelParams) {
   add(
       convnext_weights(), static_cast<roadnn_model_kind>(6), [](auto&) {}, "kind");
   add(
-      convnext_weights(), C, [](auto& p) { p.max_isa = static_cast<roadnn_isa>(3); }, "max_isa");
+      convnext_weights(), C, [](auto& p) { p.max_isa = static_cast<roadnn_isa>(4); }, "max_isa");
   add(
       convnext_weights(), C, [](auto& p) { p.max_isa = static_cast<roadnn_isa>(-1); }, "max_isa");
   add(
