@@ -15,9 +15,11 @@
 
 namespace nn {
 
+namespace {
 // The hardware's bf16 kernels (the best ISA's table): the packed layout is theirs, so the
 // same kernel runs whatever cap a later call has (this may run on a worker thread).
 const KernelTable& bf16_kernels() { return kernel_table(detect_isa()); }
+}  // namespace
 
 bool bf16_gemm_available() { return bf16_kernels().gemm_bf16 && active_isa() == detect_isa(); }
 
