@@ -22,10 +22,6 @@
 #include "nn/gemm_kernels.h"
 #include "nn/threads.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace {
 
 enum class Epi { Bias, BiasGelu, BiasScaleResidual };
@@ -150,11 +146,10 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
   fill(c.data(), c.size(), 7);
   std::vector<nn::bf16> ab(a.size());  // every ConvNeXt K is even: no pad needed
   if (ukernel == kBf16) nn::convert_to_bf16(kTileRows * threads, s.k, a.data(), s.k, ab.data(), s.k);
+  const int saved = nn::num_threads();
+  nn::set_num_threads(threads);
   for (auto _ : state) {
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for num_threads(threads) schedule(static)
-#endif
-    for (int t = 0; t < threads; ++t) {
+    nn::parallel_team(threads, [&](int t, int) {
       const float* at = a.data() + a_floats * t;
       float* ct = c.data() + c_floats * t;
       const nn::GemmEpilogue ep = p.epilogue(s, ct, s.n);
@@ -164,9 +159,10 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
       } else {
         for (int i = 0; i < kTilesPerIteration; ++i) nn::gemm(kTileRows, at, s.k, p.w, ct, s.n, ep);
       }
-    }
+    });
     benchmark::ClobberMemory();
   }
+  nn::set_num_threads(saved);
   nnbench::set_flop_counters(
       state, 2.0 * kTileRows * kTilesPerIteration * threads * s.n * s.k, threads);
 }

@@ -8,10 +8,6 @@
 #include "nn/isa.h"
 #include "nn/peak.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nnbench {
 
 double peak_gflops(int threads) {
@@ -41,17 +37,7 @@ void bm_peak(benchmark::State& state, nn::Isa isa, int threads) {
   double flops = 0.0;
   float sink = 0.0f;
   for (auto _ : state) {
-#ifdef ROADNN_OPENMP
-#pragma omp parallel num_threads(threads) reduction(+ : flops)
-    {
-      float local = 0.0f;
-      flops += nn::peak_loop(static_cast<int>(isa), kIterations, &local);
-#pragma omp critical
-      sink += local;
-    }
-#else
-    flops += nn::peak_loop(static_cast<int>(isa), kIterations, &sink);
-#endif
+    flops += nn::peak_parallel(static_cast<int>(isa), kIterations, threads, &sink);
   }
   benchmark::DoNotOptimize(sink);
   state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsRate);

@@ -43,7 +43,7 @@ install(FILES ${PROJECT_BINARY_DIR}/roadnnConfig.cmake ${PROJECT_BINARY_DIR}/roa
 # roadnn.pc, relocatable: its paths are relative to where it is installed (${pcfiledir}),
 # so `cmake --install --prefix P` gives a working P/lib/pkgconfig/roadnn.pc.
 # Libs.private (pkg-config --static): what the C++ compiler links beyond the C compiler
-# (libstdc++, libm for GCC) and OpenMP's flag.
+# (libstdc++, libm for GCC) and the thread flag.
 # (An absolute CMAKE_INSTALL_LIBDIR / INCLUDEDIR is written as given.)
 if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}")
   set(ROADNN_PC_PREFIX ${CMAKE_INSTALL_PREFIX})
@@ -65,8 +65,8 @@ foreach(lib IN LISTS CMAKE_CXX_IMPLICIT_LINK_LIBRARIES)
     list(APPEND ROADNN_PC_LIBS_PRIVATE -l${lib})
   endif()
 endforeach()
-if(ROADNN_WITH_OPENMP)
-  list(APPEND ROADNN_PC_LIBS_PRIVATE ${OpenMP_CXX_FLAGS})
+if(ROADNN_WITH_THREADS)
+  list(APPEND ROADNN_PC_LIBS_PRIVATE -pthread)
 endif()
 list(JOIN ROADNN_PC_LIBS_PRIVATE " " ROADNN_PC_LIBS_PRIVATE)
 configure_file(${CMAKE_CURRENT_LIST_DIR}/roadnn.pc.in ${PROJECT_BINARY_DIR}/roadnn.pc @ONLY)

@@ -36,11 +36,11 @@ function(roadnn_isa_flags)
   endforeach()
 endfunction()
 
-# Links OpenMP when enabled; the runtime code tests ROADNN_OPENMP rather than _OPENMP
-# so that a build without it is explicit.
-function(roadnn_link_openmp target)
-  if(ROADNN_WITH_OPENMP)
-    target_link_libraries(${target} PUBLIC OpenMP::OpenMP_CXX)
-    target_compile_definitions(${target} PUBLIC ROADNN_OPENMP=1)
+# Links the thread library when the engine has worker threads (ROADNN_WITH_THREADS); the
+# runtime code tests ROADNN_THREADS so that a single-threaded build is explicit.
+function(roadnn_link_threads target)
+  if(ROADNN_WITH_THREADS)
+    target_link_libraries(${target} PUBLIC Threads::Threads)
+    target_compile_definitions(${target} PUBLIC ROADNN_THREADS=1)
   endif()
 endfunction()

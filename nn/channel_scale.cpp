@@ -5,10 +5,6 @@
 
 #include "nn/error.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 
 void scale_channels(const TensorView& x, const float* scale) {

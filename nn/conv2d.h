@@ -70,7 +70,7 @@ void conv2d_rows(const ConstTensorView& in, const Conv2dWeights& w, const Tensor
                  int y0, int y1, float* scratch, Act act = Act::None,
                  const float* residual = nullptr, bool act_after_residual = false);
 
-// All rows, split over the OpenMP team. scratch holds num_threads() *
+// All rows, split over the team's threads. scratch holds num_threads() *
 // conv2d_scratch_floats(w, out.shape.w) floats (the caller plans it once).
 void conv2d(const ConstTensorView& in, const Conv2dWeights& w, const TensorView& out,
             float* scratch, Act act = Act::None, const float* residual = nullptr,

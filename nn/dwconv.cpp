@@ -9,10 +9,6 @@
 #include "nn/kernel_table.h"
 #include "nn/error.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 

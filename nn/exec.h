@@ -4,8 +4,8 @@
 // session's run open on the calling thread for the duration of that call (and
 // restore on exit), so two models in one process, or two sessions on two threads,
 // never see each other's options. Code outside parallel regions reads them through
-// active_isa(), num_threads() and winograd_enabled(); every OpenMP region of the
-// engine passes num_threads(nn::num_threads()), never the caller's OpenMP setting.
+// active_isa(), num_threads() and winograd_enabled(); every parallel region of the
+// engine (nn/threads.h) sizes its team by num_threads() alone.
 #pragma once
 
 #include "nn/isa.h"

@@ -24,10 +24,6 @@
 #include "nn/gemm_kernels.h"
 #include "nn/kernel_table.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 
@@ -288,7 +284,7 @@ void gemm_blocked(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t
 void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, float* c,
                 std::ptrdiff_t ldc, const GemmEpilogue& ep) {
   const int panels = (w.n + w.nr - 1) / w.nr;
-#ifdef ROADNN_OPENMP
+#ifdef ROADNN_THREADS
   const int threads = team_size();
   if (threads > 1) {
     const int mr = w.mr;

@@ -62,7 +62,7 @@ class GemmWeights {
 void gemm(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
           std::ptrdiff_t ldc, const GemmEpilogue& ep = {});
 
-// Splits the rows (and, for small M, the columns) over the OpenMP team; bitwise
+// Splits the rows (and, for small M, the columns) over the team's threads; bitwise
 // identical to gemm(). Call from outside a parallel region.
 void gemm_parallel(int m, const float* a, std::ptrdiff_t lda, const GemmWeights& w, float* c,
                    std::ptrdiff_t ldc, const GemmEpilogue& ep = {});

@@ -60,7 +60,7 @@ class GemmWeightsBf16 {
 void gemm_bf16(int m, const bf16* a, std::ptrdiff_t lda, const GemmWeightsBf16& w, float* c,
                std::ptrdiff_t ldc, const GemmEpilogue& ep = {});
 
-// Splits rows (or, for small M, columns) over the OpenMP team; bitwise equal to gemm_bf16.
+// Splits rows (or, for small M, columns) over the team's threads; bitwise equal to gemm_bf16.
 void gemm_bf16_parallel(int m, const bf16* a, std::ptrdiff_t lda, const GemmWeightsBf16& w,
                         float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep = {});
 

@@ -141,7 +141,7 @@ struct GemmEpilogue;
 // Rows [m0, m1), panels [p0, p1), single-threaded.
 void gemm_blocked(int m0, int m1, int p0, int p1, const float* a, std::ptrdiff_t lda,
                   const GemmPacked& w, float* c, std::ptrdiff_t ldc, const GemmEpilogue& ep);
-// All rows, split over the OpenMP team (rows, or columns for small M); bitwise equal to
+// All rows, split over the team's threads (rows, or columns for small M); bitwise equal to
 // gemm_blocked over everything.
 void gemm_split(int m, const float* a, std::ptrdiff_t lda, const GemmPacked& w, float* c,
                 std::ptrdiff_t ldc, const GemmEpilogue& ep);

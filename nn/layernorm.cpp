@@ -9,10 +9,6 @@
 #include "nn/kernel_table.h"
 #include "nn/layernorm_kernel.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 
@@ -81,7 +77,7 @@ void layernorm_parallel(std::size_t rows, int c, const float* x, std::ptrdiff_t 
                         std::ptrdiff_t ldy, const float* gamma, const float* beta, float eps) {
   check_args("layernorm", rows, c, x, ldx, y, ldy);
   const Isa isa = active_isa();
-#ifdef ROADNN_OPENMP
+#ifdef ROADNN_THREADS
   const int threads = team_size();
   // Rows in multiples of 4 per chunk keep the kernels' groups full; a row's result
   // does not depend on its group anyway.

@@ -6,10 +6,6 @@
 
 #include "nn/error.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 
@@ -32,10 +28,6 @@ std::size_t check(const char* who, const float* src, int n, int c, int h, int w,
     throw Error(std::string(who) + ": destination overlaps the source");
   return count;
 }
-
-#ifdef ROADNN_OPENMP
-// Threads for a parallel loop: the whole team, or 1 when already inside a region.
-#endif
 
 // [planes][rows][cols] -> [planes][cols][rows] where rows is the large stride of the
 // source (NCHW -> NHWC: rows = c, cols = h*w). Per item: 64 columns, all rows in

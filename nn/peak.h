@@ -14,4 +14,8 @@ double peak_gflops(int threads);
 // to *sink so the loop is kept.
 double peak_loop(int isa, long iterations, float* sink);
 
+// peak_loop on `threads` threads at once (the calling thread's pool); returns the flops
+// of all of them and adds their results to *sink.
+double peak_parallel(int isa, long iterations, int threads, float* sink);
+
 }  // namespace nn

@@ -7,10 +7,6 @@
 
 #include "nn/error.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 
@@ -27,10 +23,6 @@ void check_input(const char* who, const Shape& in) {
   if (in.n < 1 || in.h < 1 || in.w < 1 || in.c < 1)
     throw Error(std::string(who) + ": input shape " + shape_str(in) + " must be positive");
 }
-
-#ifdef ROADNN_OPENMP
-// Threads for a parallel loop: the whole team, or 1 when already inside a region.
-#endif
 
 }  // namespace
 

@@ -10,10 +10,6 @@
 #include "nn/kernel_table.h"
 #include "nn/resize_kernel.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn {
 namespace {
 
@@ -60,10 +56,6 @@ Lerp linear_src(long long dst, long long in, long long out, float ratio) {
   return Lerp{i0, i0 < in - 1 ? i0 + 1 : i0, 1.0f - l1, l1};
 }
 
-
-#ifdef ROADNN_OPENMP
-// Threads for a parallel loop: the whole team, or 1 when already inside a region.
-#endif
 
 }  // namespace
 

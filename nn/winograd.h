@@ -54,7 +54,7 @@ int winograd_block_tiles(int cin, int cout);
 std::size_t winograd_scratch_floats(int cin, int cout);
 
 // out = epilogue(conv3x3(in)), stride 1, pad 1; the epilogue as nn/gemm.h's (bias, act,
-// residual, act_after_residual; no scale). Tiles are split over the OpenMP team; each
+// residual, act_after_residual; no scale). Tiles are split over the team's threads; each
 // output element's arithmetic does not depend on the split. scratch: num_threads() x
 // winograd_scratch_floats(cin, cout) floats, 64-byte aligned.
 void winograd_conv2d(const ConstTensorView& in, const WinogradWeights& w, const float* bias,

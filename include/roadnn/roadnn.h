@@ -137,7 +137,8 @@ ROADNN_API const char* roadnn_model_warning(const roadnn_model* model, size_t in
 /* ---- sessions ----------------------------------------------------------------- */
 
 typedef struct roadnn_session_params {
-  int threads; /* 0 (default): all cores; the session's own team, never the caller's OpenMP setting.
+  int threads; /* 0 (default): all cores; the session's own team (the calling thread plus
+                  threads - 1 engine workers), unaffected by the caller's OpenMP settings.
                   Results are bitwise the same for any count. */
   int height, width; /* the input size to plan for (0: the model's natural size).
                         ConvNeXt: the tensor's H x W (required).

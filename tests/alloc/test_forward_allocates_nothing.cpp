@@ -31,7 +31,7 @@ void count_allocation() {
 }  // namespace
 
 // The C allocator itself is interposed (glibc's own entry points do the work), so
-// malloc/calloc/realloc/aligned_alloc/posix_memalign calls from C code, OpenMP or
+// malloc/calloc/realloc/aligned_alloc/posix_memalign calls from C code, the C++ runtime or
 // the engine's AlignedBuffer count too, not only operator new (which calls malloc).
 extern "C" {
 void* __libc_malloc(std::size_t);
@@ -113,7 +113,7 @@ TEST(NoAllocation, ConvNeXtForward) {
     nn::ConvNeXt model(st);
     model.plan(2, 96, 128);
     std::vector<float> x(2 * 3 * 96 * 128, 0.5f);
-    model.forward(x.data());  // warm-up: OpenMP starts its team
+    model.forward(x.data());  // warm-up: starts this thread's pool workers
     EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << threads << " threads";
     model.profiler().set_enabled(true);
     EXPECT_EQ(0, allocations_during([&] { model.forward(x.data()); })) << "profiling, " << threads << " threads";

@@ -21,10 +21,6 @@
 #include "tests/nn/random_data.h"
 #include "tests/reference/torch_ref.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace {
 
 using nntest::random_vector;
@@ -327,28 +323,29 @@ class AliasedProduct {
     nn::set_num_threads(saved);
     return c;
   }
-  // gemm() on chunks of `rows` rows from inside an OpenMP parallel loop.
+  // gemm() on chunks of `rows` rows from inside a parallel loop of two threads.
   std::vector<float> inside_parallel_region(int rows) const {
     std::vector<float> c = fresh_c();
     const int chunks = (m_ + rows - 1) / rows;
-#ifdef ROADNN_OPENMP
-#pragma omp parallel for num_threads(2) schedule(dynamic)
-#endif
-    for (int i = 0; i < chunks; ++i) {
-      const int r0 = i * rows, r1 = std::min(m_, r0 + rows);
+    const int saved = nn::num_threads();
+    nn::set_num_threads(2);
+    nn::parallel_for(chunks, true, [&](long long i) {
+      const int r0 = static_cast<int>(i) * rows, r1 = std::min(m_, r0 + rows);
       float* ci = c.data() + static_cast<std::size_t>(r0) * ldc_;
       w_.gemm(r1 - r0, a_row(r0), lda_, ci, ldc_, epilogue(ci));
-    }
+    });
+    nn::set_num_threads(saved);
     return c;
   }
   // gemm_parallel() called by one thread of a parallel region runs on that thread alone.
   std::vector<float> parallel_inside_region() const {
     std::vector<float> c = fresh_c();
-#ifdef ROADNN_OPENMP
-#pragma omp parallel num_threads(2)
-#pragma omp single
-#endif
-    w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
+    const int saved = nn::num_threads();
+    nn::set_num_threads(2);
+    nn::parallel_team(2, [&](int id, int) {
+      if (id == 0) w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
+    });
+    nn::set_num_threads(saved);
     return c;
   }
   int m() const { return m_; }

@@ -10,10 +10,6 @@
 #include "nn/error.h"
 #include "nn/resize.h"
 
-#ifdef ROADNN_OPENMP
-#include <omp.h>
-#endif
-
 namespace nn::detection {
 
 ImageSizes checked_input_size(int h, int w) {
