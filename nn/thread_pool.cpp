@@ -52,9 +52,12 @@ ThreadPool& ThreadPool::of_this_thread() {
 }
 
 void ThreadPool::grow(int workers) {
+  // A new worker starts from the generation before the job about to be published, so it
+  // takes part in that job however late the OS starts it.
+  const std::uint32_t seen = generation(state_.load());
   while (static_cast<int>(workers_.size()) < workers) {
     const int slot = static_cast<int>(workers_.size()) + 1;
-    workers_.emplace_back([this, slot] { worker_main(slot); });
+    workers_.emplace_back([this, slot, seen] { worker_main(slot, seen); });
   }
 }
 
@@ -100,8 +103,7 @@ void ThreadPool::work(std::uint32_t gen, int slot) {
   }
 }
 
-void ThreadPool::worker_main(int slot) {
-  std::uint32_t seen = generation(state_.load());
+void ThreadPool::worker_main(int slot, std::uint32_t seen) {
   for (;;) {
     const auto fresh = [&] { return generation(state_.load()) != seen; };
     if (!spin_until(fresh)) {

@@ -43,7 +43,8 @@ class ThreadPool {
 
  private:
   void grow(int workers);
-  void worker_main(int slot);
+  // Waits for jobs after generation `seen` and works on them until the pool stops.
+  void worker_main(int slot, std::uint32_t seen);
   // Claims and runs tasks of job `gen` until none is left.
   void work(std::uint32_t gen, int slot);
 
