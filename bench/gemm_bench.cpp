@@ -20,6 +20,7 @@
 #include "nn/gemm.h"
 #include "nn/gemm_bf16.h"
 #include "nn/gemm_kernels.h"
+#include "nn/exec.h"
 #include "nn/threads.h"
 
 namespace {
@@ -124,14 +125,12 @@ void bm_full(benchmark::State& state, GemmShape s, int ukernel, int threads) {
   nn::AlignedBuffer a(static_cast<std::size_t>(s.m) * s.k), c(static_cast<std::size_t>(s.m) * s.n);
   fill(a.data(), a.size(), 4);
   fill(c.data(), c.size(), 5);
-  const int saved = nn::num_threads();
-  nn::set_num_threads(threads);
+  const nn::ExecScope threads_scope(nn::with_threads(threads));
   const nn::GemmEpilogue ep = p.epilogue(s, c.data(), s.n);
   for (auto _ : state) {
     nn::gemm_parallel(s.m, a.data(), s.k, p.w, c.data(), s.n, ep);
     benchmark::ClobberMemory();
   }
-  nn::set_num_threads(saved);
   nnbench::set_flop_counters(state, 2.0 * s.m * s.n * s.k, threads);
 }
 
@@ -146,8 +145,7 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
   fill(c.data(), c.size(), 7);
   std::vector<nn::bf16> ab(a.size());  // every ConvNeXt K is even: no pad needed
   if (ukernel == kBf16) nn::convert_to_bf16(kTileRows * threads, s.k, a.data(), s.k, ab.data(), s.k);
-  const int saved = nn::num_threads();
-  nn::set_num_threads(threads);
+  const nn::ExecScope threads_scope(nn::with_threads(threads));
   for (auto _ : state) {
     nn::parallel_team(threads, [&](int t, int) {
       const float* at = a.data() + a_floats * t;
@@ -162,7 +160,6 @@ void bm_tiles(benchmark::State& state, GemmShape s, int ukernel, int threads) {
     });
     benchmark::ClobberMemory();
   }
-  nn::set_num_threads(saved);
   nnbench::set_flop_counters(
       state, 2.0 * kTileRows * kTilesPerIteration * threads * s.n * s.k, threads);
 }

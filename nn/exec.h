@@ -21,6 +21,14 @@ struct ExecOptions {
 // The calling thread's current options (defaults outside any scope).
 const ExecOptions& current_exec();
 
+// The calling thread's current options with `threads` threads instead (for an ExecScope
+// that changes only the thread count).
+inline ExecOptions with_threads(int threads) {
+  ExecOptions o = current_exec();
+  o.threads = threads;
+  return o;
+}
+
 class ExecScope {
  public:
   explicit ExecScope(const ExecOptions& options);

@@ -55,10 +55,8 @@ double peak_parallel(int isa, long iterations, int threads, float* sink) {
   threads = std::max(1, std::min(threads, kMaxThreads));
   double flops[kMaxThreads] = {};
   float sinks[kMaxThreads] = {};
-  const int saved = current_exec().threads;
-  set_num_threads(threads);
+  const ExecScope threads_scope(with_threads(threads));
   parallel_team(threads, [&](int id, int) { flops[id] = peak_loop(isa, iterations, &sinks[id]); });
-  set_num_threads(saved);
   double total = 0.0;
   for (int i = 0; i < threads; ++i) {
     total += flops[i];

@@ -16,6 +16,7 @@
 #include "nn/gemm.h"
 #include "nn/gemm_bf16.h"
 #include "nn/gemm_kernels.h"
+#include "nn/exec.h"
 #include "nn/threads.h"
 #include "tests/nn/isa_param.h"
 #include "tests/nn/random_data.h"
@@ -317,35 +318,29 @@ class AliasedProduct {
   }
   std::vector<float> parallel(int threads) const {
     std::vector<float> c = fresh_c();
-    const int saved = nn::num_threads();
-    nn::set_num_threads(threads);
+    const nn::ExecScope threads_scope(nn::with_threads(threads));
     w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
-    nn::set_num_threads(saved);
     return c;
   }
   // gemm() on chunks of `rows` rows from inside a parallel loop of two threads.
   std::vector<float> inside_parallel_region(int rows) const {
     std::vector<float> c = fresh_c();
     const int chunks = (m_ + rows - 1) / rows;
-    const int saved = nn::num_threads();
-    nn::set_num_threads(2);
+    const nn::ExecScope threads_scope(nn::with_threads(2));
     nn::parallel_for(chunks, true, [&](long long i) {
       const int r0 = static_cast<int>(i) * rows, r1 = std::min(m_, r0 + rows);
       float* ci = c.data() + static_cast<std::size_t>(r0) * ldc_;
       w_.gemm(r1 - r0, a_row(r0), lda_, ci, ldc_, epilogue(ci));
     });
-    nn::set_num_threads(saved);
     return c;
   }
   // gemm_parallel() called by one thread of a parallel region runs on that thread alone.
   std::vector<float> parallel_inside_region() const {
     std::vector<float> c = fresh_c();
-    const int saved = nn::num_threads();
-    nn::set_num_threads(2);
+    const nn::ExecScope threads_scope(nn::with_threads(2));
     nn::parallel_team(2, [&](int id, int) {
       if (id == 0) w_.gemm(m_, a_.data(), lda_, c.data(), ldc_, epilogue(c.data()), true);
     });
-    nn::set_num_threads(saved);
     return c;
   }
   int m() const { return m_; }

@@ -15,12 +15,7 @@ namespace {
 
 // Sets the calling thread's thread count for the test's duration.
 struct Threads {
-  explicit Threads(int n) : scope(options(n)) {}
-  static nn::ExecOptions options(int n) {
-    nn::ExecOptions o;
-    o.threads = n;
-    return o;
-  }
+  explicit Threads(int n) : scope(nn::with_threads(n)) {}
   nn::ExecScope scope;
 };
 
