@@ -70,7 +70,7 @@ void ThreadPool::run(long long tasks, int threads, TaskFn fn, void* ctx) {
   tasks_.store(tasks, std::memory_order_relaxed);
   participants_.store(threads, std::memory_order_relaxed);
   done_.store(0, std::memory_order_relaxed);
-  state_.store(static_cast<std::uint64_t>(gen) << 32);  // publishes the fields above
+  state_.store(static_cast<std::uint64_t>(gen) << 32 | static_cast<std::uint64_t>(tasks));  // publishes the fields above
   if (sleepers_.load() > 0) {
     { std::lock_guard<std::mutex> lock(mutex_); }
     wake_.notify_all();
@@ -89,12 +89,12 @@ void ThreadPool::work(std::uint32_t gen, int slot) {
   for (;;) {
     std::uint64_t s = state_.load();
     if (generation(s) != gen) return;
+    const std::uint32_t unclaimed = static_cast<std::uint32_t>(s);
+    if (unclaimed == 0) return;
+    if (!state_.compare_exchange_weak(s, s - 1)) continue;
+    // The claim succeeded on this job's word, so the fields below are this job's.
     const long long tasks = tasks_.load(std::memory_order_relaxed);
-    const long long task = static_cast<std::uint32_t>(s);
-    if (task >= tasks) return;
-    // Claims `task` only if the job is still `gen`: after a successful claim the fields
-    // below are this job's (the next job is written only once this one is finished).
-    if (!state_.compare_exchange_weak(s, s + 1)) continue;
+    const long long task = tasks - unclaimed;  // tasks are claimed in increasing order
     fn_.load(std::memory_order_relaxed)(ctx_.load(std::memory_order_relaxed), task, slot);
     if (done_.fetch_add(1) + 1 == tasks && slot != 0 && caller_waiting_.load()) {
       { std::lock_guard<std::mutex> lock(mutex_); }

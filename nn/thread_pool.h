@@ -48,12 +48,18 @@ class ThreadPool {
   // Claims and runs tasks of job `gen` until none is left.
   void work(std::uint32_t gen, int slot);
 
-  // state_: the job's generation (high 32 bits) and its next unclaimed task (low 32).
-  // A thread claims a task with a compare-exchange that also checks the generation, so
-  // a worker that saw an older job can never claim a task of the current one by mistake.
+  // state_: the job's generation (high 32 bits) and how many of its tasks are still
+  // unclaimed (low 32). A thread claims a task with a compare-exchange that also checks
+  // the generation, so a worker that saw an older job can never claim a task of the
+  // current one by mistake. The word alone decides whether a task is left: a claim that
+  // first compared against tasks_ could read the *next* job's count (written once the
+  // caller saw this job finish) while the word still held this job's generation, and
+  // claim a task that does not exist.
   std::atomic<std::uint64_t> state_{0};
   // The job's description, valid while its generation is current. Written by the
-  // caller before it publishes the generation; read by workers after they see it.
+  // caller before it publishes the generation; read by a worker only after its claim
+  // succeeded (the job cannot finish, so the next cannot be written, before the claimed
+  // task has).
   std::atomic<TaskFn> fn_{nullptr};
   std::atomic<void*> ctx_{nullptr};
   std::atomic<long long> tasks_{0};
