@@ -70,7 +70,8 @@ void ThreadPool::run(long long tasks, int threads, TaskFn fn, void* ctx) {
   tasks_.store(tasks, std::memory_order_relaxed);
   participants_.store(threads, std::memory_order_relaxed);
   done_.store(0, std::memory_order_relaxed);
-  state_.store(static_cast<std::uint64_t>(gen) << 32 | static_cast<std::uint64_t>(tasks));  // publishes the fields above
+  // Publishes the fields above: generation `gen`, all `tasks` unclaimed.
+  state_.store(static_cast<std::uint64_t>(gen) << 32 | static_cast<std::uint64_t>(tasks));
   if (sleepers_.load() > 0) {
     { std::lock_guard<std::mutex> lock(mutex_); }
     wake_.notify_all();

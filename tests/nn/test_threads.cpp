@@ -5,10 +5,8 @@
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
-#include <cstdio>
 #include <cstdlib>
-#include <mutex>
+#include <future>
 #include <thread>
 #include <vector>
 
@@ -140,46 +138,45 @@ TEST(Threads, ARegionWaitsForATaskStillRunningOnAnotherThread) {
 // Many short jobs whose task counts alternate between few and many: a worker still
 // looking at a finished job must never claim a task of it that does not exist when the
 // next, larger job is being written (that once ran tasks twice or out of range, let the
-// caller return before a task finished, or left it waiting forever). A watchdog turns a
-// hang into a failure naming the test instead of a suite timeout.
+// caller return before a task finished, or left it waiting forever). The jobs run on
+// their own thread so that a hang becomes a failure naming the test, not a suite timeout.
 TEST(Threads, AlternatingJobSizesRunEveryTaskOnceWithoutHanging) {
-  std::mutex m;
-  std::condition_variable cv;
-  bool finished = false;
-  std::thread watchdog([&] {
-    std::unique_lock<std::mutex> lock(m);
-    if (!cv.wait_for(lock, std::chrono::seconds(300), [&] { return finished; })) {
-      std::fprintf(stderr, "Threads.AlternatingJobSizesRunEveryTaskOnceWithoutHanging: a job "
-                           "did not finish within 300 s (the pool lost a task or a wake-up)\n");
-      std::_Exit(1);
+  struct Count {
+    int threads;
+    long long wrong, out_of_range;
+  };
+  auto jobs = std::async(std::launch::async, [] {
+    std::vector<Count> counts;
+    for (int threads : {2, 3, 8}) {
+      Threads t(threads);
+      std::vector<std::atomic<int>> hits(static_cast<std::size_t>(4 * threads));
+      long long wrong = 0;
+      std::atomic<long long> out_of_range{0};
+      for (int job = 0; job < 20000 && wrong + out_of_range.load() == 0; ++job) {
+        const long long n = job % 2 ? 2 : 4 * threads;
+        nn::parallel_for(n, true, [&](long long i) {
+          if (i < 0 || i >= n) {
+            out_of_range.fetch_add(1);
+            return;
+          }
+          hits[static_cast<std::size_t>(i)].fetch_add(1, std::memory_order_relaxed);
+        });
+        for (long long i = 0; i < n; ++i)
+          if (hits[static_cast<std::size_t>(i)].exchange(0) != 1) ++wrong;
+      }
+      counts.push_back({threads, wrong, out_of_range.load()});
     }
+    return counts;
   });
-  long long wrong = 0;
-  std::atomic<long long> out_of_range{0};
-  for (int threads : {2, 3, 8}) {
-    Threads t(threads);
-    std::vector<std::atomic<int>> hits(static_cast<std::size_t>(4 * threads));
-    for (int job = 0; job < 20000 && wrong + out_of_range.load() == 0; ++job) {
-      const long long n = job % 2 ? 2 : 4 * threads;
-      nn::parallel_for(n, true, [&](long long i) {
-        if (i < 0 || i >= n) {
-          out_of_range.fetch_add(1);
-          return;
-        }
-        hits[static_cast<std::size_t>(i)].fetch_add(1, std::memory_order_relaxed);
-      });
-      for (long long i = 0; i < n; ++i)
-        if (hits[static_cast<std::size_t>(i)].exchange(0) != 1) ++wrong;
-    }
-    EXPECT_EQ(wrong, 0) << threads << " threads: a task ran twice, or had not finished when the job returned";
-    EXPECT_EQ(out_of_range.load(), 0) << threads << " threads: a task index beyond the job's range ran";
+  if (jobs.wait_for(std::chrono::seconds(300)) != std::future_status::ready) {
+    ADD_FAILURE() << "a job did not finish within 300 s (the pool lost a task or a wake-up)";
+    std::_Exit(1);  // the blocked thread cannot be joined
   }
-  {
-    std::lock_guard<std::mutex> lock(m);
-    finished = true;
+  for (const Count& c : jobs.get()) {
+    EXPECT_EQ(c.wrong, 0) << c.threads
+                          << " threads: a task ran twice, or had not finished when the job returned";
+    EXPECT_EQ(c.out_of_range, 0) << c.threads << " threads: a task index beyond the job's range ran";
   }
-  cv.notify_one();
-  watchdog.join();
 }
 
 }  // namespace
