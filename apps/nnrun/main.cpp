@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   apps::apply_exec_environment("nnrun");
   std::string model, weights_path, input_path, image_path, output_path, isa_name, precision_name, conv3x3;
   std::string dump_path, dump_filter, format = "table", profile_out;
-  int threads = 0, repeat = 0;
+  int threads = 0, repeat = 0, warmup = 0;
   bool profile = false, quiet = false, dump_proposals = false;
 
   std::string model_list = "models:\n";
@@ -102,6 +102,8 @@ int main(int argc, char** argv) {
   args.option("threads", "N", "threads (default: all cores)", &threads);
   args.option("repeat", "R", "run the forward pass R more times; print peak_rss_mb= and, last,\n"
               "                            forward_ms min=.. median=.. max=.. (forward only, no loading or I/O)", &repeat);
+  args.option("warmup", "N", "with --repeat or --profile: N more untimed passes before the timed ones (default 0;\n"
+              "                            the first pass, which writes --output, is never timed)", &warmup);
   args.flag("profile", "print a per-layer time table (mean over the timed passes)", &profile);
   args.option("format", "F", "--profile output: table (default, for people), json or csv: per layer the PyTorch\n"
               "                            module name (as --dump names it), op, shape, FLOPs, bytes moved, ms min/median/max\n"
@@ -138,6 +140,8 @@ int main(int argc, char** argv) {
     if (model == m.name) info = &m;
   if (!info) args.fail("unknown model '" + model + "'");
   if (repeat < 0) args.fail("--repeat must be >= 0");
+  if (warmup < 0) args.fail("--warmup must be >= 0");
+  if (warmup > 0 && repeat == 0 && !profile) args.fail("--warmup needs --repeat or --profile");
   if (input_path.empty() == image_path.empty()) args.fail("give one of --input FILE and --image FILE");
   for (const std::string* p : {&weights_path, &output_path})
     if (p->empty()) args.fail("--weights and --output must not be empty");
@@ -229,6 +233,7 @@ int main(int argc, char** argv) {
     if (dump) dump->write(dump_path);
 
     if (repeat > 0 || profile) {
+      for (int i = 0; i < warmup; ++i) runner->forward();
       if (nn::Profiler* table = runner->profiler()) {
         table->set_enabled(profile);
         table->reset_times();

@@ -1,13 +1,13 @@
 // Times one ONNX model under ONNX Runtime (the CPU build inside the npm package
 // onnxruntime-node) for scripts/compare_pytorch --peer ort: loads the session, runs
-// one warm-up pass and --runs timed passes on the input, writes every output tensor
+// --warmup untimed passes (default 1) and --runs timed passes on the input, writes every output tensor
 // as raw little-endian bytes into --out-dir and prints one JSON line:
 //   {"ms": [...], "outputs": {"name": {"type": "float32", "dims": [...], "file": "..."}}}
 // With --profile PREFIX, ORT's own profiler writes its JSON trace (per-node times) of
 // the timed passes and the line gets "profile": "<file>".
 //
 //   node ort_time.mjs --ort DIR --model M.onnx --input X.bin --shape 1,3,224,224
-//                     --input-name input --threads 2 --runs 1 --out-dir DIR [--profile PREFIX]
+//                     --input-name input --threads 2 --runs 1 --out-dir DIR [--warmup N] [--profile PREFIX]
 // DIR (--ort) is the folder holding node_modules/onnxruntime-node.
 import { createRequire } from 'module';
 import fs from 'fs';
@@ -42,7 +42,13 @@ const options = {
 };
 const session = await ort.InferenceSession.create(args.model, options);
 const feeds = { [args['input-name']]: x };
-let outputs = await session.run(feeds);  // warm-up
+// Warm-up: ORT's first passes after loading are slow (ConvNeXt-Tiny 224 on AMD Zen 5, 2
+// threads: 76 ms for the pass after the first, 43 ms from the third on), so a single one
+// is not enough.
+const warmup = 'warmup' in args ? Number(args.warmup) : 1;
+if (!Number.isInteger(warmup) || warmup < 1) fail(`--warmup must be an integer >= 1, got '${args.warmup}'`);
+let outputs = await session.run(feeds);
+for (let i = 1; i < warmup; ++i) outputs = await session.run(feeds);
 // ORT's profiler runs for the whole session once enabled; a second session with it on
 // times the same passes (the first one stays unprofiled so "ms" is unperturbed).
 const profiled = args.profile
@@ -56,7 +62,7 @@ for (let i = 0; i < Number(args.runs); ++i) {
 }
 let profile = null;
 if (profiled) {
-  await profiled.run(feeds);  // its own warm-up
+  for (let i = 0; i < warmup; ++i) await profiled.run(feeds);  // its own warm-up
   for (let i = 0; i < Number(args.runs); ++i) await profiled.run(feeds);
   // endProfiling() returns nothing here: the trace is PREFIX_<date>.json, the newest one.
   profiled.endProfiling();

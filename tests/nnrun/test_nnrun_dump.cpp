@@ -262,6 +262,23 @@ TEST_F(NnrunDump, ProfileJsonParsesAndNamesTheDumpsTensors) {
   }
 }
 
+// --warmup passes run before the timed ones and are not counted: every layer's call
+// count is --repeat's. Without --repeat or --profile, or negative, it is a usage error.
+TEST_F(NnrunDump, WarmupPassesAreNotTimed) {
+  Result r = run("--profile --repeat 2 --warmup 3 --format json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json::Value v = json::parse(r.out, "nnrun stdout");
+  EXPECT_EQ(v.get("passes")->number(), 2);
+  const auto& layers = v.get("layers")->array();
+  ASSERT_FALSE(layers.empty());
+  for (const auto& l : layers) EXPECT_EQ(l.get("calls")->number(), 2) << l.get("name")->str();
+  for (const char* bad : {"--warmup 2", "--repeat 1 --warmup -1"}) {
+    Result u = run(bad);
+    EXPECT_EQ(u.code, 2) << bad << ": " << u.err;
+    EXPECT_NE(u.err.find("--warmup"), std::string::npos) << u.err;
+  }
+}
+
 TEST_F(NnrunDump, ProfileCsvAndProfileOut) {
   Result r = run("--profile --repeat 2 --format csv --profile-out " + path("t.csv"));
   ASSERT_EQ(r.code, 0) << r.err;
