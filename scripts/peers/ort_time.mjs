@@ -43,7 +43,7 @@ const options = {
 const session = await ort.InferenceSession.create(args.model, options);
 const feeds = { [args['input-name']]: x };
 // Warm-up: ORT's first passes after loading are slow (ConvNeXt-Tiny 224 on AMD Zen 5, 2
-// threads: 76 ms for the pass after the first, 43 ms from the third on), so a single one
+// threads: 76-97 ms for the pass after the first, 43-50 ms from the third on), so a single one
 // is not enough.
 const warmup = 'warmup' in args ? Number(args.warmup) : 1;
 if (!Number.isInteger(warmup) || warmup < 1) fail(`--warmup must be an integer >= 1, got '${args.warmup}'`);
