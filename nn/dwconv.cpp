@@ -81,14 +81,15 @@ void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const 
 
 // Scalar path on [kh][kw][c] taps: per output pixel, channels in chunks whose
 // accumulators stay on the stack; same order as dwconv_ref, hence bitwise equal to it.
-void dwconv_rows_scalar(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out,
-                        int n, int oy) {
+// Output row oy of image n into dst ([ow][c]).
+void dwconv_row_scalar(const ConstTensorView& in, const DwConvWeights& w, int ow, int n, int oy,
+                       float* dst_row) {
   const DwConvParams& p = w.params();
   const Shape& is = in.shape;
   const int c = is.c;
   constexpr int kChunk = 64;
-  for (int ox = 0; ox < out.shape.w; ++ox) {
-    float* dst = out.pixel(n, oy, ox);
+  for (int ox = 0; ox < ow; ++ox) {
+    float* dst = dst_row + static_cast<std::ptrdiff_t>(ox) * c;
     for (int c0 = 0; c0 < c; c0 += kChunk) {
       const int cn = c - c0 < kChunk ? c - c0 : kChunk;
       float acc[kChunk] = {};
@@ -157,27 +158,14 @@ DwConvWeights DwConvWeights::pack(const float* w, const float* bias, int c, cons
   return out;
 }
 
-void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out) {
-  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
+namespace {
+
+DwConvJob make_job(const ConstTensorView& in, const DwConvWeights& w, const Shape& os, float* out) {
   const DwConvParams& p = w.params();
-  check_views(in, p, w.channels(), out);
   const Shape& is = in.shape;
-  const Shape& os = out.shape;
-  const int threads = team_size();
-
-  const DwConvBlockFn block = kernel_table(w.isa()).dwconv_block;
-  if (!block) {
-    const long long rows = static_cast<long long>(os.n) * os.h;
-    parallel_for(rows, rows > 1, [&](long long r_) {
-      const long long r = static_cast<long long>(r_);
-      dwconv_rows_scalar(in, w, out, static_cast<int>(r / os.h), static_cast<int>(r % os.h));
-    });
-    return;
-  }
-
   DwConvJob job;
   job.in = in.data;
-  job.out = out.data;
+  job.out = out;
   job.taps = w.taps();
   job.bias = w.bias();
   job.h = is.h;
@@ -192,6 +180,32 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
   job.pad_h = p.pad_h;
   job.pad_w = p.pad_w;
   job.act = static_cast<int>(p.act);
+  job.out_image = static_cast<std::ptrdiff_t>(os.h) * os.w * os.c;
+  return job;
+}
+
+}  // namespace
+
+void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out) {
+  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
+  const DwConvParams& p = w.params();
+  check_views(in, p, w.channels(), out);
+  const Shape& is = in.shape;
+  const Shape& os = out.shape;
+  const int threads = team_size();
+
+  const DwConvBlockFn block = kernel_table(w.isa()).dwconv_block;
+  if (!block) {
+    const long long rows = static_cast<long long>(os.n) * os.h;
+    parallel_for(rows, rows > 1, [&](long long r_) {
+      const long long r = static_cast<long long>(r_);
+      const int n = static_cast<int>(r / os.h), oy = static_cast<int>(r % os.h);
+      dwconv_row_scalar(in, w, os.w, n, oy, out.pixel(n, oy, 0));
+    });
+    return;
+  }
+
+  const DwConvJob job = make_job(in, w, os, out.data);
 
   // Work items: (image, chunk of output rows, group of channel blocks). Inside an
   // item the kernel walks tiles along W and, per tile, every block of the group, so
@@ -221,6 +235,34 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
     const int g1 = g0 + group < blocks ? g0 + group : blocks;
     block(job, n, g0, g1, y0, y1);
   });
+}
+
+void dwconv_rows(const ConstTensorView& in, const DwConvWeights& w, int n, int oy0, int oy1,
+                 float* out) {
+  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
+  const DwConvParams& p = w.params();
+  const Shape os = dwconv_output_shape(in.shape, p);
+  if (in.shape.c != w.channels())
+    throw Error("dwconv: input has " + std::to_string(in.shape.c) + " channels, weights " +
+                std::to_string(w.channels()));
+  if (!in.data || !out) throw Error("dwconv: null input or output");
+  if (n < 0 || n >= os.n || oy0 < 0 || oy0 > oy1 || oy1 > os.h)
+    throw Error("dwconv: rows [" + std::to_string(oy0) + ", " + std::to_string(oy1) +
+                ") of image " + std::to_string(n) + " are outside the " + std::to_string(os.n) +
+                "x" + std::to_string(os.h) + " output");
+  const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(os.w) * os.c;
+  if (overlaps(in.data, in.shape.count(), out, static_cast<std::size_t>(oy1 - oy0) * row))
+    throw Error("dwconv: output overlaps the input");
+  const DwConvBlockFn block = kernel_table(w.isa()).dwconv_block;
+  if (!block) {
+    for (int oy = oy0; oy < oy1; ++oy) dwconv_row_scalar(in, w, os.w, n, oy, out + (oy - oy0) * row);
+    return;
+  }
+  DwConvJob job = make_job(in, w, os, out);
+  job.out_image = 0;
+  job.out_row0 = oy0;
+  const int lanes = lanes_of(w.isa());
+  block(job, n, 0, (os.c + lanes - 1) / lanes, oy0, oy1);
 }
 
 void dwconv_ref(const ConstTensorView& in, const float* w, const float* bias,

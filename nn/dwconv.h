@@ -52,6 +52,13 @@ Shape dwconv_output_shape(const Shape& in, const DwConvParams& p);
 // Parallel over output rows inside; bitwise identical for any thread count.
 void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out);
 
+// Output rows [oy0, oy1) of image n of dwconv(in, w) into out, dense [oy1 - oy0][ow][c],
+// on the calling thread: bitwise the elements dwconv() writes for those rows. For callers
+// that consume a band of rows while it is in cache (ConvNeXt's blocks). out must not
+// alias in.
+void dwconv_rows(const ConstTensorView& in, const DwConvWeights& w, int n, int oy0, int oy1,
+                 float* out);
+
 // Scalar reference on unpacked PyTorch weights [c, 1, kh, kw].
 void dwconv_ref(const ConstTensorView& in, const float* w, const float* bias,
                 const DwConvParams& p, const TensorView& out);

@@ -215,7 +215,7 @@ void dw_run_rows(const DwConvJob& j, int n, int cb0, int cb1, int oy0, int oy1) 
       const typename Ops::Mask mask = Ops::mask(lanes);
       const float* taps = j.taps + static_cast<std::ptrdiff_t>(cb) * kh * kw * L;
       const float* img = j.in + static_cast<std::ptrdiff_t>(n) * j.h * j.w * c + c0;
-      float* oimg = j.out + static_cast<std::ptrdiff_t>(n) * j.oh * j.ow * c + c0;
+      float* oimg = j.out + static_cast<std::ptrdiff_t>(n) * j.out_image + c0;
       a.bias = j.bias + c0;
       a.mask = mask;
       a.full = full;
@@ -237,7 +237,7 @@ void dw_run_rows(const DwConvJob& j, int n, int cb0, int cb1, int oy0, int oy1) 
           ++nrows;
         }
         a.nrows = nrows;
-        float* orow = oimg + (static_cast<std::ptrdiff_t>(oy) * j.ow + ox0) * c;
+        float* orow = oimg + (static_cast<std::ptrdiff_t>(oy - j.out_row0) * j.ow + ox0) * c;
         // Full blocks of R; a remainder is merged with the last full block and split
         // in two halves, since a block much narrower than R has too few independent
         // accumulators to hide the FMA latency.

@@ -20,6 +20,10 @@ struct DwConvJob {
   int oh = 0, ow = 0;
   int kh = 0, kw = 0, stride_h = 1, stride_w = 1, pad_h = 0, pad_w = 0;
   int act = 0;  // static_cast<int>(nn::Act): None, Relu or HardSwish
+  // Output row oy of image n starts at out + n * out_image + (oy - out_row0) * ow * c:
+  // the whole tensor (out_image = oh * ow * c, out_row0 = 0) or a band of one image's rows.
+  std::ptrdiff_t out_image = 0;
+  int out_row0 = 0;
 };
 
 // Largest kh * kw the kernels accept: one tile's zero-padded input rows live in a

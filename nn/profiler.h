@@ -39,6 +39,14 @@ class Profiler {
   bool enabled() const { return enabled_; }
   void set_enabled(bool on) { enabled_ = on; }
   const std::vector<ProfileEntry>& entries() const { return entries_; }
+  // Adds one call of `ms` to entry `index` (for times measured by the caller, e.g. the
+  // slowest thread's share of a layer interleaved with another).
+  void record(int index, double ms) {
+    auto& e = entries_[index];
+    e.total_ms += ms;
+    e.calls += 1;
+    if (e.samples.size() < e.samples.capacity()) e.samples.push_back(ms);
+  }
   // A fixed-width table: layer, op, shape, mean ms, GFLOP/s, share of the total.
   std::string table() const;
 
@@ -52,11 +60,7 @@ class Profiler {
     // Ends the timing before the scope does (once; later calls do nothing).
     void stop() {
       if (!p_) return;
-      auto& e = p_->entries_[index_];
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
-      e.total_ms += ms;
-      e.calls += 1;
-      if (e.samples.size() < e.samples.capacity()) e.samples.push_back(ms);
+      p_->record(index_, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count());
       p_ = nullptr;
     }
     Scope(const Scope&) = delete;

@@ -112,11 +112,14 @@ class ConvNeXt {
     std::string name, down_name, down_covers;  // "features.2s+1", "features.2s"
     int down_chunk = 1;       // output rows per LayerNorm + im2col + GEMM step
     bool down_whole = false;  // small: one im2col, then a GEMM split over columns
+    std::size_t mlp_tile = 0; // rows per fused MLP tile, 0: layer by layer (fused_mlp_rows)
+    int band = 0;             // image rows per depthwise -> MLP band, 0: whole-map depthwise
   };
 
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
-  void run_block(const Block& b, Shape s);
+  void run_block(const Stage& st, const Block& b, Shape s);
+  void run_block_banded(const Stage& st, const Block& b, Shape s);
   void dump_mlp_layers(const Block& b, Shape s);
   // Scratch of one MLP tile (or of all rows on the unfused path): the normalised rows,
   // the hidden rows and, for bf16, both again in bfloat16.
@@ -128,7 +131,10 @@ class ConvNeXt {
   };
   std::size_t mlp_scratch_floats(std::size_t rows, int c) const;
   MlpScratch mlp_scratch(float* base, std::size_t rows, int c) const;
-  void run_mlp_rows(const Block& b, int c, std::size_t m0, std::size_t m1, const MlpScratch& s);
+  // The fused MLP on `rows` rows: t the depthwise output, res the residual, y the result
+  // (may be res).
+  void run_mlp_rows(const Block& b, int c, int rows, const float* t, const float* res, float* y,
+                    const MlpScratch& s);
 
   ConvNeXtConfig cfg_;
   Precision precision_ = Precision::F32;
@@ -146,6 +152,7 @@ class ConvNeXt {
   AlignedBuffer act_a_, act_b_, scratch_;
   std::size_t scratch_per_thread_ = 0, conv_scratch_ = 0, mlp_tile_ = 0;
   int planned_threads_ = 0;
+  std::vector<double> band_dw_ms_;  // per thread: depthwise time of a banded block (profiling)
   Profiler prof_;
   int prof_stem_ = -1;
   DumpSink* dump_ = nullptr;

@@ -167,6 +167,40 @@ TEST_P(DwConvTest, BitwiseIdenticalForOneAndTwoThreads) {
   nn::set_num_threads(saved);
 }
 
+// dwconv_rows (a band of one image's rows into a dense buffer, as ConvNeXt's banded
+// blocks call it) writes bitwise what dwconv writes for those rows: every band of 1, 3
+// and 8 rows, for images 0 and 1, and nothing outside the band.
+TEST_P(DwConvTest, RowBandsEqualTheWholeMapBitwise) {
+  nntest::IsaScope scope(GetParam());
+  const DwConvParams kernels[] = {make(7, 7, 1, 3, 3), make(3, 3, 2, 1, 1, Act::HardSwish),
+                                   make(1, 5, 1, 0, 2, Act::Relu)};
+  for (const Shape& in : {Shape{2, 19, 37, 40}, Shape{2, 5, 13, 17}}) {
+    for (const DwConvParams& p : kernels) {
+      SCOPED_TRACE(label(in, p));
+      const std::vector<float> x = random_vector(in.count(), 21);
+      const std::vector<float> w = random_vector(static_cast<std::size_t>(in.c) * p.kh * p.kw, 22);
+      const std::vector<float> b = random_vector(in.c, 23);
+      const nn::DwConvWeights packed = nn::DwConvWeights::pack(w.data(), b.data(), in.c, p);
+      const Shape os = nn::dwconv_output_shape(in, p);
+      std::vector<float> whole(os.count());
+      nn::dwconv(nn::ConstTensorView(x.data(), in), packed, nn::TensorView{whole.data(), os});
+      const std::size_t row = static_cast<std::size_t>(os.w) * os.c;
+      for (int band : {1, 3, 8})
+        for (int n = 0; n < os.n; ++n)
+          for (int y0 = 0; y0 < os.h; y0 += band) {
+            const int y1 = std::min(os.h, y0 + band);
+            // One guard row after the band: it must stay untouched.
+            std::vector<float> got((y1 - y0 + 1) * row, -7.0f);
+            nn::dwconv_rows(nn::ConstTensorView(x.data(), in), packed, n, y0, y1, got.data());
+            const float* want = whole.data() + (static_cast<std::size_t>(n) * os.h + y0) * row;
+            ASSERT_EQ(0, std::memcmp(got.data(), want, (y1 - y0) * row * sizeof(float)))
+                << "band " << band << " image " << n << " rows " << y0 << ".." << y1;
+            for (std::size_t i = (y1 - y0) * row; i < got.size(); ++i) ASSERT_EQ(got[i], -7.0f) << i;
+          }
+    }
+  }
+}
+
 // Weights keep the layout of the ISA they were packed for, whatever is active later.
 TEST_P(DwConvTest, PackedWeightsKeepTheirIsa) {
   const DwConvParams p = make(3, 3, 1, 1, 1);
@@ -233,6 +267,18 @@ TEST(DwConvErrors, MismatchedTensorsThrow) {
                           nn::TensorView{y.data(), s}),
                nn::Error);
   EXPECT_NO_THROW(nn::dwconv(nn::ConstTensorView(x.data(), s), packed, nn::TensorView{y.data(), s}));
+  // dwconv_rows: rows or image outside the output, reversed rows, overlap, no weights.
+  const nn::ConstTensorView xv(x.data(), s);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, 4, 6, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 1, 0, 1, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, -1, 1, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, 3, 2, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, 0, 2, x.data() + 20), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, nn::DwConvWeights(), 0, 0, 1, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(nn::ConstTensorView(y3.data(), Shape{1, 5, 5, 3}), packed, 0, 0, 1, y.data()),
+               nn::Error);
+  EXPECT_NO_THROW(nn::dwconv_rows(xv, packed, 0, 2, 5, y.data()));
+  EXPECT_NO_THROW(nn::dwconv_rows(xv, packed, 0, 5, 5, y.data()));
 }
 
 // A constant image and kernel: interior outputs are k*k*x*w + b exactly, borders
