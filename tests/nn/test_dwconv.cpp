@@ -89,6 +89,17 @@ void check_case(nn::Isa isa, const Shape& in_shape, const DwConvParams& p, bool 
   }
 }
 
+// A random input and packed random weights with bias for one layer (seeds seed..seed+2).
+struct RandomLayer {
+  std::vector<float> x;
+  nn::DwConvWeights packed;
+};
+RandomLayer random_layer(const Shape& in, const DwConvParams& p, unsigned seed) {
+  const std::vector<float> w = random_vector(static_cast<std::size_t>(in.c) * p.kh * p.kw, seed + 1);
+  const std::vector<float> b = random_vector(in.c, seed + 2);
+  return {random_vector(in.count(), seed), nn::DwConvWeights::pack(w.data(), b.data(), in.c, p)};
+}
+
 class DwConvTest : public testing::TestWithParam<nn::Isa> {};
 
 // Every kernel shape the models use, plus generic ones (run-time kernel width and
@@ -151,10 +162,9 @@ TEST_P(DwConvTest, BitwiseIdenticalForOneAndTwoThreads) {
   for (const Shape& in : {Shape{2, 37, 45, 40}, Shape{1, 9, 20, 100}}) {
     for (const DwConvParams& p : kernels) {
       SCOPED_TRACE(label(in, p));
-      const std::vector<float> x = random_vector(in.count(), 5);
-      const std::vector<float> w = random_vector(static_cast<std::size_t>(in.c) * p.kh * p.kw, 6);
-      const std::vector<float> b = random_vector(in.c, 7);
-      const nn::DwConvWeights packed = nn::DwConvWeights::pack(w.data(), b.data(), in.c, p);
+      const RandomLayer layer = random_layer(in, p, 5);
+      const std::vector<float>& x = layer.x;
+      const nn::DwConvWeights& packed = layer.packed;
       const Shape os = nn::dwconv_output_shape(in, p);
       std::vector<float> one(os.count()), two(os.count(), 1.0f);
       nn::set_num_threads(1);
@@ -177,10 +187,9 @@ TEST_P(DwConvTest, RowBandsEqualTheWholeMapBitwise) {
   for (const Shape& in : {Shape{2, 19, 37, 40}, Shape{2, 5, 13, 17}}) {
     for (const DwConvParams& p : kernels) {
       SCOPED_TRACE(label(in, p));
-      const std::vector<float> x = random_vector(in.count(), 21);
-      const std::vector<float> w = random_vector(static_cast<std::size_t>(in.c) * p.kh * p.kw, 22);
-      const std::vector<float> b = random_vector(in.c, 23);
-      const nn::DwConvWeights packed = nn::DwConvWeights::pack(w.data(), b.data(), in.c, p);
+      const RandomLayer layer = random_layer(in, p, 21);
+      const std::vector<float>& x = layer.x;
+      const nn::DwConvWeights& packed = layer.packed;
       const Shape os = nn::dwconv_output_shape(in, p);
       std::vector<float> whole(os.count());
       nn::dwconv(nn::ConstTensorView(x.data(), in), packed, nn::TensorView{whole.data(), os});
