@@ -59,7 +59,13 @@ bool overlaps(const float* a, std::size_t na, const float* b, std::size_t nb) {
   return a < b + nb && b < a + na;
 }
 
-void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const TensorView& out) {
+const DwConvParams& packed_params(const DwConvWeights& w) {
+  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
+  return w.params();
+}
+
+// The input half of the checks, shared by the whole-map and the row-band entry points.
+void check_input(const ConstTensorView& in, int c) {
   if (in.shape.n < 1 || in.shape.h < 1 || in.shape.w < 1 || in.shape.c < 1)
     throw Error("dwconv: input shape must be positive, got [" + std::to_string(in.shape.n) +
                 "," + std::to_string(in.shape.h) + "," + std::to_string(in.shape.w) + "," +
@@ -67,6 +73,11 @@ void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const 
   if (in.shape.c != c)
     throw Error("dwconv: input has " + std::to_string(in.shape.c) + " channels, weights have " +
                 std::to_string(c));
+  if (!in.data) throw Error("dwconv: null tensor data");
+}
+
+void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const TensorView& out) {
+  check_input(in, c);
   const Shape want = dwconv_output_shape(in.shape, p);
   if (out.shape != want)
     throw Error("dwconv: output shape [" + std::to_string(out.shape.n) + "," +
@@ -74,7 +85,7 @@ void check_views(const ConstTensorView& in, const DwConvParams& p, int c, const 
                 std::to_string(out.shape.c) + "] should be [" + std::to_string(want.n) + "," +
                 std::to_string(want.h) + "," + std::to_string(want.w) + "," +
                 std::to_string(want.c) + "]");
-  if (!in.data || !out.data) throw Error("dwconv: null tensor data");
+  if (!out.data) throw Error("dwconv: null tensor data");
   if (overlaps(in.data, in.count(), out.data, out.count()))
     throw Error("dwconv: output must not overlap the input");
 }
@@ -187,8 +198,7 @@ DwConvJob make_job(const ConstTensorView& in, const DwConvWeights& w, const Shap
 }  // namespace
 
 void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView& out) {
-  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
-  const DwConvParams& p = w.params();
+  const DwConvParams& p = packed_params(w);
   check_views(in, p, w.channels(), out);
   const Shape& is = in.shape;
   const Shape& os = out.shape;
@@ -239,13 +249,10 @@ void dwconv(const ConstTensorView& in, const DwConvWeights& w, const TensorView&
 
 void dwconv_rows(const ConstTensorView& in, const DwConvWeights& w, int n, int oy0, int oy1,
                  float* out) {
-  if (w.channels() == 0) throw Error("dwconv: weights are not packed");
-  const DwConvParams& p = w.params();
+  const DwConvParams& p = packed_params(w);
+  check_input(in, w.channels());
+  if (!out) throw Error("dwconv: null tensor data");
   const Shape os = dwconv_output_shape(in.shape, p);
-  if (in.shape.c != w.channels())
-    throw Error("dwconv: input has " + std::to_string(in.shape.c) + " channels, weights " +
-                std::to_string(w.channels()));
-  if (!in.data || !out) throw Error("dwconv: null input or output");
   if (n < 0 || n >= os.n || oy0 < 0 || oy0 > oy1 || oy1 > os.h)
     throw Error("dwconv: rows [" + std::to_string(oy0) + ", " + std::to_string(oy1) +
                 ") of image " + std::to_string(n) + " are outside the " + std::to_string(os.n) +

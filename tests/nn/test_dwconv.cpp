@@ -276,7 +276,8 @@ TEST(DwConvErrors, MismatchedTensorsThrow) {
                           nn::TensorView{y.data(), s}),
                nn::Error);
   EXPECT_NO_THROW(nn::dwconv(nn::ConstTensorView(x.data(), s), packed, nn::TensorView{y.data(), s}));
-  // dwconv_rows: rows or image outside the output, reversed rows, overlap, no weights.
+  // dwconv_rows: rows or image outside the output, reversed rows, overlap, no weights,
+  // channel mismatch.
   const nn::ConstTensorView xv(x.data(), s);
   EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, 4, 6, y.data()), nn::Error);
   EXPECT_THROW(nn::dwconv_rows(xv, packed, 1, 0, 1, y.data()), nn::Error);
@@ -286,6 +287,11 @@ TEST(DwConvErrors, MismatchedTensorsThrow) {
   EXPECT_THROW(nn::dwconv_rows(xv, nn::DwConvWeights(), 0, 0, 1, y.data()), nn::Error);
   EXPECT_THROW(nn::dwconv_rows(nn::ConstTensorView(y3.data(), Shape{1, 5, 5, 3}), packed, 0, 0, 1, y.data()),
                nn::Error);
+  // A zero-width input (its output shape is not positive either) and null pointers.
+  EXPECT_THROW(nn::dwconv_rows(nn::ConstTensorView(x.data(), Shape{1, 5, 0, 4}), packed, 0, 0, 1, y.data()),
+               nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(nn::ConstTensorView(nullptr, s), packed, 0, 0, 1, y.data()), nn::Error);
+  EXPECT_THROW(nn::dwconv_rows(xv, packed, 0, 0, 1, nullptr), nn::Error);
   EXPECT_NO_THROW(nn::dwconv_rows(xv, packed, 0, 2, 5, y.data()));
   EXPECT_NO_THROW(nn::dwconv_rows(xv, packed, 0, 5, 5, y.data()));
 }
