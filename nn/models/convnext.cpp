@@ -317,7 +317,6 @@ void ConvNeXt::plan(int n, int h, int w) {
     }
   }
   out_shape_ = s;
-  mlp_tile_ = mlp_scratch;
   scratch_per_thread_ = round_up_floats(std::max(conv_scratch_, mlp_scratch));  // 64-byte aligned shares
   act_a_.resize(act);
   act_b_.resize(act);

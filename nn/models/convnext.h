@@ -150,7 +150,7 @@ class ConvNeXt {
   Shape in_shape_, out_shape_;
   std::vector<Shape> stage_shapes_;
   AlignedBuffer act_a_, act_b_, scratch_;
-  std::size_t scratch_per_thread_ = 0, conv_scratch_ = 0, mlp_tile_ = 0;
+  std::size_t scratch_per_thread_ = 0, conv_scratch_ = 0;
   int planned_threads_ = 0;
   std::vector<double> band_dw_ms_;  // per thread: depthwise time of a banded block (profiling)
   Profiler prof_;
