@@ -3,6 +3,7 @@
 // layers at 720x1280. FLOPs count 2 per tap per output element (2*49 for 7x7).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -54,6 +55,51 @@ void BM_DwConv(benchmark::State& state) {
   nn::set_num_threads(0);
   nn::set_isa(nn::detect_isa());
 }
+
+// ConvNeXt's banded blocks (nn/models/convnext.cpp, run_block_banded): one thread walks
+// the image in bands of `band` output rows with dwconv_rows into a small buffer, the
+// input coming from memory as in the model (the block input is far larger than L2).
+void BM_DwConvBands(benchmark::State& state) {
+  const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
+  const int c = static_cast<int>(state.range(2)), band = static_cast<int>(state.range(3));
+  const auto isa = static_cast<nn::Isa>(state.range(4));
+  if (!nn::isa_supported(isa)) {
+    state.SkipWithError("ISA not supported by this CPU");
+    return;
+  }
+  nn::set_isa(isa);
+  nn::DwConvParams p;
+  p.kh = p.kw = 7;
+  p.pad_h = p.pad_w = 3;
+  const nn::Shape in{1, h, w, c};
+  std::mt19937 gen(1);
+  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
+  std::vector<float> x(in.count()), wt(static_cast<std::size_t>(c) * 49), b(c);
+  std::vector<float> y(static_cast<std::size_t>(band) * w * c);
+  for (auto& v : x) v = dist(gen);
+  for (auto& v : wt) v = dist(gen);
+  for (auto& v : b) v = dist(gen);
+  const nn::DwConvWeights packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
+  const nn::ConstTensorView xv(x.data(), in);
+  for (auto _ : state) {
+    for (int y0 = 0; y0 < h; y0 += band) nn::dwconv_rows(xv, packed, 0, y0, std::min(h, y0 + band), y.data());
+    benchmark::ClobberMemory();
+  }
+  nnbench::set_flop_counters(state, 2.0 * 49 * static_cast<double>(in.count()), 1);
+  state.SetLabel(nn::isa_name(isa));
+  nn::set_isa(nn::detect_isa());
+}
+
+BENCHMARK(BM_DwConvBands)
+    ->ArgNames({"h", "w", "c", "band", "isa"})
+    ->ArgsProduct({{320}, {480}, {96}, {8}, {1, 2}})
+    ->Args({160, 240, 192, 8, 2})
+    ->Args({80, 120, 384, 8, 2})
+    ->Args({16, 60, 16, 8, 2})
+    ->Args({16, 60, 96, 8, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(0.5);
 
 void shapes(benchmark::internal::Benchmark* b) {
   // {h, w, c, k, stride} of the input.

@@ -170,6 +170,19 @@ void dw_fill_row(float* dst, const float* src, int ix0, int count, int w, std::p
   for (; p < count; ++p) Ops::store(dst + p * L, zero);
 }
 
+// Asks for positions [ix0, ix0 + count) (clipped to [0, w)) of input rows [iy0, iy1) of
+// one channel block, `src` at its row 0 and pixel 0, to be brought into L2: one prefetch
+// per pixel (an AVX-512 block is one 64-byte line; narrower ones share a line).
+inline void dw_prefetch_rows(const float* src, int iy0, int iy1, int ix0, int count, int w,
+                             std::ptrdiff_t c) {
+  const int p0 = ix0 < 0 ? 0 : ix0;
+  const int p1 = ix0 + count < w ? ix0 + count : w;
+  for (int iy = iy0; iy < iy1; ++iy) {
+    const float* row = src + static_cast<std::ptrdiff_t>(iy) * w * c;
+    for (int p = p0; p < p1; ++p) __builtin_prefetch(row + p * c, 0, 2);
+  }
+}
+
 // KW == 0: generic kernel (run-time kernel width and stride). Tiles along W outside,
 // channel blocks inside, so a tile's input (all channels) is brought in from memory
 // once and each block's ring of padded rows is then built from cache.
@@ -204,6 +217,20 @@ void dw_run_rows(const DwConvJob& j, int n, int cb0, int cb1, int oy0, int oy1) 
   a.act = j.act;
   a.ostride = c;
 
+  // Input rows this call reads; while one (tile, block) is computed, those rows of the
+  // next (tile, block) are prefetched into L2 a share per output row, so that its ring
+  // fills find them there rather than wait on L3 or memory for each strided line (the
+  // fills took as long as the FMAs without it: ConvNeXt's blocks read their input from
+  // memory). Callers keep row ranges short (dwconv: chunks of <= 16 rows; ConvNeXt:
+  // bands of 8), so the prefetched region stays far smaller than L2. Only for 7x7: with
+  // MobileNetV3's 3x3 and 5x5 (fewer FMAs per input line) the prefetches cost more than
+  // they saved (nn_bench BM_DwConv, Zen 5: 3-11 % slower).
+  constexpr bool kPrefetchNext = KW == 7;
+  const int iy_lo = oy0 * j.stride_h - j.pad_h < 0 ? 0 : oy0 * j.stride_h - j.pad_h;
+  const int iy_hi = (oy1 - 1) * j.stride_h - j.pad_h + kh > j.h ? j.h : (oy1 - 1) * j.stride_h - j.pad_h + kh;
+  const int in_rows = iy_hi - iy_lo, steps = oy1 - oy0;
+  const float* img_n = j.in + static_cast<std::ptrdiff_t>(n) * j.h * j.w * c;
+
   for (int ox0 = 0; ox0 < j.ow; ox0 += tw) {
     const int count = j.ow - ox0 < tw ? j.ow - ox0 : tw;
     const int width = (count - 1) * sw + kw;
@@ -220,7 +247,22 @@ void dw_run_rows(const DwConvJob& j, int n, int cb0, int cb1, int oy0, int oy1) 
       a.mask = mask;
       a.full = full;
       for (int s = 0; s < kh; ++s) tag[s] = -1;
+      // The (tile, block) after this one: the next block, or the next tile's first.
+      int next_c0 = -1, next_ix0 = ix0, next_width = width;
+      if (cb + 1 < cb1) {
+        next_c0 = (cb + 1) * L;
+      } else if (ox0 + tw < j.ow) {
+        const int next_count = j.ow - ox0 - tw < tw ? j.ow - ox0 - tw : tw;
+        next_c0 = cb0 * L;
+        next_ix0 = (ox0 + tw) * sw - j.pad_w;
+        next_width = (next_count - 1) * sw + kw;
+      }
       for (int oy = oy0; oy < oy1; ++oy) {
+        if (kPrefetchNext && next_c0 >= 0) {
+          const int k = oy - oy0;
+          dw_prefetch_rows(img_n + next_c0, iy_lo + in_rows * k / steps, iy_lo + in_rows * (k + 1) / steps,
+                           next_ix0, next_width, j.w, c);
+        }
         int nrows = 0;
         for (int ky = 0; ky < kh; ++ky) {
           const int iy = oy * j.stride_h - j.pad_h + ky;
