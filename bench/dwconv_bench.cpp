@@ -14,6 +14,26 @@
 
 namespace {
 
+// A seeded layer: input [1, h, w, c] and packed weights, values in [-1, 1).
+struct RandomDwLayer {
+  nn::Shape in;
+  std::vector<float> x;
+  nn::DwConvWeights packed;
+};
+
+RandomDwLayer random_dw_layer(int h, int w, int c, const nn::DwConvParams& p) {
+  RandomDwLayer l{nn::Shape{1, h, w, c}, {}, {}};
+  std::mt19937 gen(1);
+  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
+  std::vector<float> wt(static_cast<std::size_t>(c) * p.kh * p.kw), b(c);
+  l.x.resize(l.in.count());
+  for (auto& v : l.x) v = dist(gen);
+  for (auto& v : wt) v = dist(gen);
+  for (auto& v : b) v = dist(gen);
+  l.packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
+  return l;
+}
+
 void BM_DwConv(benchmark::State& state) {
   const int h = static_cast<int>(state.range(0)), w = static_cast<int>(state.range(1));
   const int c = static_cast<int>(state.range(2)), k = static_cast<int>(state.range(3));
@@ -33,15 +53,12 @@ void BM_DwConv(benchmark::State& state) {
   p.pad_h = p.pad_w = k / 2;
   // ConvNeXt's depthwise conv has no activation; MobileNetV3's fuse one.
   p.act = stride == 1 && k == 7 ? nn::Act::None : nn::Act::HardSwish;
-  const nn::Shape in{1, h, w, c};
+  const RandomDwLayer l = random_dw_layer(h, w, c, p);
+  const nn::Shape& in = l.in;
+  const std::vector<float>& x = l.x;
+  const nn::DwConvWeights& packed = l.packed;
   const nn::Shape out = nn::dwconv_output_shape(in, p);
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  std::vector<float> x(in.count()), wt(static_cast<std::size_t>(c) * k * k), b(c), y(out.count());
-  for (auto& v : x) v = dist(gen);
-  for (auto& v : wt) v = dist(gen);
-  for (auto& v : b) v = dist(gen);
-  const nn::DwConvWeights packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
+  std::vector<float> y(out.count());
 
   nn::dwconv(nn::ConstTensorView(x.data(), in), packed, nn::TensorView{y.data(), out});
   for (auto _ : state) {
@@ -71,21 +88,15 @@ void BM_DwConvBands(benchmark::State& state) {
   nn::DwConvParams p;
   p.kh = p.kw = 7;
   p.pad_h = p.pad_w = 3;
-  const nn::Shape in{1, h, w, c};
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  std::vector<float> x(in.count()), wt(static_cast<std::size_t>(c) * 49), b(c);
+  const RandomDwLayer l = random_dw_layer(h, w, c, p);
   std::vector<float> y(static_cast<std::size_t>(band) * w * c);
-  for (auto& v : x) v = dist(gen);
-  for (auto& v : wt) v = dist(gen);
-  for (auto& v : b) v = dist(gen);
-  const nn::DwConvWeights packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
-  const nn::ConstTensorView xv(x.data(), in);
+  const nn::ConstTensorView xv(l.x.data(), l.in);
   for (auto _ : state) {
-    for (int y0 = 0; y0 < h; y0 += band) nn::dwconv_rows(xv, packed, 0, y0, std::min(h, y0 + band), y.data());
+    for (int y0 = 0; y0 < h; y0 += band)
+      nn::dwconv_rows(xv, l.packed, 0, y0, std::min(h, y0 + band), y.data());
     benchmark::ClobberMemory();
   }
-  nnbench::set_flop_counters(state, 2.0 * 49 * static_cast<double>(in.count()), 1);
+  nnbench::set_flop_counters(state, 2.0 * 49 * static_cast<double>(l.in.count()), 1);
   state.SetLabel(nn::isa_name(isa));
   nn::set_isa(nn::detect_isa());
 }

@@ -231,37 +231,45 @@ void dw_run_rows(const DwConvJob& j, int n, int cb0, int cb1, int oy0, int oy1) 
   const int in_rows = iy_hi - iy_lo, steps = oy1 - oy0;
   const float* img_n = j.in + static_cast<std::ptrdiff_t>(n) * j.h * j.w * c;
 
-  for (int ox0 = 0; ox0 < j.ow; ox0 += tw) {
+  // The tile starting at output column ox0: its output pixels, and the input positions
+  // [ix0, ix0 + width) they read.
+  struct TileSpan {
+    int count, width, ix0;
+  };
+  const auto tile_at = [&](int ox0) {
     const int count = j.ow - ox0 < tw ? j.ow - ox0 : tw;
-    const int width = (count - 1) * sw + kw;
-    const int ix0 = ox0 * sw - j.pad_w;
+    return TileSpan{count, (count - 1) * sw + kw, ox0 * sw - j.pad_w};
+  };
+
+  for (int ox0 = 0; ox0 < j.ow; ox0 += tw) {
+    const TileSpan tile = tile_at(ox0);
+    const int count = tile.count, width = tile.width, ix0 = tile.ix0;
     for (int cb = cb0; cb < cb1; ++cb) {
       const int c0 = cb * L;
       const int lanes = j.c - c0 < L ? j.c - c0 : L;
       const bool full = lanes == L;
       const typename Ops::Mask mask = Ops::mask(lanes);
       const float* taps = j.taps + static_cast<std::ptrdiff_t>(cb) * kh * kw * L;
-      const float* img = j.in + static_cast<std::ptrdiff_t>(n) * j.h * j.w * c + c0;
+      const float* img = img_n + c0;
       float* oimg = j.out + static_cast<std::ptrdiff_t>(n) * j.out_image + c0;
       a.bias = j.bias + c0;
       a.mask = mask;
       a.full = full;
       for (int s = 0; s < kh; ++s) tag[s] = -1;
       // The (tile, block) after this one: the next block, or the next tile's first.
-      int next_c0 = -1, next_ix0 = ix0, next_width = width;
+      int next_c0 = -1;
+      TileSpan next = tile;
       if (cb + 1 < cb1) {
         next_c0 = (cb + 1) * L;
       } else if (ox0 + tw < j.ow) {
-        const int next_count = j.ow - ox0 - tw < tw ? j.ow - ox0 - tw : tw;
         next_c0 = cb0 * L;
-        next_ix0 = (ox0 + tw) * sw - j.pad_w;
-        next_width = (next_count - 1) * sw + kw;
+        next = tile_at(ox0 + tw);
       }
       for (int oy = oy0; oy < oy1; ++oy) {
         if (kPrefetchNext && next_c0 >= 0) {
           const int k = oy - oy0;
           dw_prefetch_rows(img_n + next_c0, iy_lo + in_rows * k / steps, iy_lo + in_rows * (k + 1) / steps,
-                           next_ix0, next_width, j.w, c);
+                           next.ix0, next.width, j.w, c);
         }
         int nrows = 0;
         for (int ky = 0; ky < kh; ++ky) {
