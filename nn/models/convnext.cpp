@@ -475,9 +475,14 @@ void ConvNeXt::run_mlp_rows(const Block& b, int c, int rows, const float* t, con
 // is in cache, the result going to act_b_ (the depthwise still reads the block input
 // around the band), which then becomes act_a_. The depthwise output never travels to
 // memory and back. Every element is computed as on the unbanded path.
+// Upward: the bands go from the end of the share to its start. The forward alternates
+// (upward after the stem or a downsampling layer, then down, up, ...), so each block starts on
+// the rows the previous one wrote last, which are still in L2/L3 (a stage-1 activation
+// at 1280x1920 is 59 MB, larger than the L3). Medians of 11 alternating nnrun runs at
+// 1280x1920 on Zen 5, 2 threads: about 1 % less time per forward, lower in 9 of 11 pairs.
 // Profiling: the depthwise row gets the slowest thread's summed depthwise time, the MLP
 // row the rest of the block's wall time.
-void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s) {
+void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s, bool upward) {
   using Clock = std::chrono::steady_clock;
   const bool timed = prof_.enabled();
   const Clock::time_point start = timed ? Clock::now() : Clock::time_point();
@@ -492,9 +497,20 @@ void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s) {
     const MlpScratch sc = mlp_scratch(base, tile, c);
     float* band = base + mlp_scratch_floats(tile, c);
     double dw_ms = 0;
-    for (long long r = r0; r < r1;) {
-      const int n = static_cast<int>(r / s.h), y0 = static_cast<int>(r % s.h);
-      const int y1 = static_cast<int>(std::min<long long>({s.h, y0 + st.band, y0 + (r1 - r)}));
+    for (long long done = 0; done < r1 - r0;) {
+      // Band rows [r, r + y1 - y0): downward from r0, or upward from r1.
+      int n, y0, y1;
+      if (upward) {
+        const long long last = r1 - 1 - done;
+        n = static_cast<int>(last / s.h);
+        y1 = static_cast<int>(last % s.h) + 1;
+        y0 = static_cast<int>(std::max<long long>({0, y1 - st.band, y1 - (r1 - r0 - done)}));
+      } else {
+        const long long r = r0 + done;
+        n = static_cast<int>(r / s.h);
+        y0 = static_cast<int>(r % s.h);
+        y1 = static_cast<int>(std::min<long long>({s.h, y0 + st.band, y0 + (r1 - r)}));
+      }
       const Clock::time_point t0 = timed ? Clock::now() : Clock::time_point();
       dwconv_rows(in, b.dw, n, y0, y1, band);
       if (timed) dw_ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -505,7 +521,7 @@ void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s) {
         run_mlp_rows(b, c, static_cast<int>(std::min(tile, pixels - p)), band + p * c,
                      act_a_.data() + off, act_b_.data() + off, sc);
       }
-      r += y1 - y0;
+      done += y1 - y0;
     }
     if (timed) band_dw_ms_[id] = dw_ms;
   });
@@ -518,8 +534,8 @@ void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s) {
   }
 }
 
-void ConvNeXt::run_block(const Stage& st, const Block& b, Shape s) {
-  if (st.band > 0 && !dump_) return run_block_banded(st, b, s);
+void ConvNeXt::run_block(const Stage& st, const Block& b, Shape s, bool upward) {
+  if (st.band > 0 && !dump_) return run_block_banded(st, b, s, upward);
   const int c = s.c;
   {
     Profiler::Scope t(&prof_, b.prof_dw);
@@ -626,8 +642,9 @@ ConstTensorView ConvNeXt::forward(const float* input_nchw) {
       std::swap(act_a_, act_b_);
       if (dump_) dump_nhwc(dump_, st.down_name, ConstTensorView(act_a_.data(), s), st.down_covers);
     }
-    for (const Block& b : st.blocks) {
-      run_block(st, b, s);
+    for (std::size_t bi = 0; bi < st.blocks.size(); ++bi) {
+      const Block& b = st.blocks[bi];
+      run_block(st, b, s, bi % 2 == 0);
       if (dump_) dump_nhwc(dump_, b.name, ConstTensorView(act_a_.data(), s), b.covers);
     }
     if (dump_) dump_nhwc(dump_, st.name, ConstTensorView(act_a_.data(), s));

@@ -118,8 +118,8 @@ class ConvNeXt {
 
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
-  void run_block(const Stage& st, const Block& b, Shape s);
-  void run_block_banded(const Stage& st, const Block& b, Shape s);
+  void run_block(const Stage& st, const Block& b, Shape s, bool upward);
+  void run_block_banded(const Stage& st, const Block& b, Shape s, bool upward);
   void dump_mlp_layers(const Block& b, Shape s);
   // Scratch of one MLP tile (or of all rows on the unfused path): the normalised rows,
   // the hidden rows and, for bf16, both again in bfloat16.
