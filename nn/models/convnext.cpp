@@ -498,7 +498,8 @@ void ConvNeXt::run_block_banded(const Stage& st, const Block& b, Shape s, bool u
     float* band = base + mlp_scratch_floats(tile, c);
     double dw_ms = 0;
     for (long long done = 0; done < r1 - r0;) {
-      // Band rows [r, r + y1 - y0): downward from r0, or upward from r1.
+      // The next band, rows [y0, y1) of image n: the share's rows taken from r0 downward,
+      // or from r1 - 1 upward.
       int n, y0, y1;
       if (upward) {
         const long long last = r1 - 1 - done;

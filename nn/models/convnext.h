@@ -118,6 +118,7 @@ class ConvNeXt {
 
   void run_stem(const float* input_nchw, Shape s);
   void run_down(const Stage& st, Shape prev, Shape s);
+  // upward: the order of a banded block's bands (run_block_banded); the result is the same.
   void run_block(const Stage& st, const Block& b, Shape s, bool upward);
   void run_block_banded(const Stage& st, const Block& b, Shape s, bool upward);
   void dump_mlp_layers(const Block& b, Shape s);
