@@ -16,6 +16,7 @@
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
 #include "roadnn/roadnn.h"
+#include "tests/counting_dump_sink.h"
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -265,13 +266,7 @@ TEST(NoAllocation, CApiDetectRun) {
 // conversion); switched off again, it allocates nothing, and the sink sees nothing.
 namespace {
 
-struct CountingSink : nn::DumpSink {
-  long tensors = 0;
-  bool wants(const std::string&) const override { return true; }
-  void tensor(const std::string&, const std::vector<std::int64_t>&, const float*, const std::string&) override {
-    ++tensors;
-  }
-};
+using testutil::CountingDumpSink;
 
 TEST(NoAllocation, DumpSwitchedOffConvNeXtAndStixelNExT) {
   auto specs = nn::convnext_tensor_specs(small(), "features.");
@@ -280,7 +275,7 @@ TEST(NoAllocation, DumpSwitchedOffConvNeXtAndStixelNExT) {
   nn::StixelNExT model(st);
   model.plan(1, 64, 256, 32);
   std::vector<float> x(3 * 64 * 256, 100.f);
-  CountingSink sink;
+  CountingDumpSink sink;
   model.set_dump(&sink);
   model.forward(x.data());
   ASSERT_GT(sink.tensors, 10) << "the dump was on";
@@ -300,7 +295,7 @@ TEST(NoAllocation, DumpSwitchedOffFasterRcnn) {
   det::FasterRcnn model(st, v, cfg);
   model.plan(120, 200);
   std::vector<float> x(3 * 120 * 200, 0.25f);
-  CountingSink sink;
+  CountingDumpSink sink;
   model.set_dump(&sink);
   model.forward(x.data());
   ASSERT_GT(sink.tensors, 50) << "the dump was on";

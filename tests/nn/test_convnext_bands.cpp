@@ -8,24 +8,14 @@
 #include <string>
 #include <vector>
 
-#include "nn/dump.h"
 #include "nn/models/convnext.h"
 #include "nn/models/synthetic_weights.h"
 #include "nn/threads.h"
+#include "tests/counting_dump_sink.h"
 #include "tests/nn/random_data.h"
 #include "weights/safetensors.h"
 
 namespace {
-
-// Counts what it is given; its presence alone makes every block take the unbanded path.
-class CountingSink : public nn::DumpSink {
- public:
-  long tensors = 0;
-  bool wants(const std::string&) const override { return true; }
-  void tensor(const std::string&, const std::vector<std::int64_t>&, const float*, const std::string&) override {
-    ++tensors;
-  }
-};
 
 std::vector<float> run(nn::ConvNeXt& model, int n, int h, int w, const std::vector<float>& x) {
   model.plan(n, h, w);
@@ -49,7 +39,7 @@ TEST(ConvNeXtBands, BitwiseTheLayerByLayerPathForEveryThreadCount) {
     SCOPED_TRACE("threads " + std::to_string(threads));
     nn::set_num_threads(threads);
     const std::vector<float> banded = run(model, n, h, w, x);
-    CountingSink sink;
+    testutil::CountingDumpSink sink;  // its presence alone makes every block unbanded
     model.set_dump(&sink);
     const std::vector<float> layered = run(model, n, h, w, x);
     model.set_dump(nullptr);
