@@ -90,11 +90,11 @@ class Layer {
       }
       // At most 8 crossings (4 edges, each counted twice at a vertex): an insertion sort.
       // (std::sort here drew GCC 12's false -Warray-bounds from its 16-element path.)
-      for (int a = 1; a < j; ++a) {
-        const float v = xx[a];
-        int b = a;
-        for (; b > 0 && xx[b - 1] > v; --b) xx[b] = xx[b - 1];
-        xx[b] = v;
+      for (int p = 1; p < j; ++p) {
+        const float v = xx[p];
+        int q = p;
+        for (; q > 0 && xx[q - 1] > v; --q) xx[q] = xx[q - 1];
+        xx[q] = v;
       }
       for (int i = 1; i < j; i += 2) hline(round_up(xx[i - 1]), round_down(xx[i]), y, c, a);
     }
