@@ -106,9 +106,14 @@ BENCHMARK(BM_DwConvBands)
     ->ArgsProduct({{320}, {480}, {96}, {8}, {1, 2}})
     ->Args({160, 240, 192, 8, 2})
     ->Args({80, 120, 384, 8, 2})
-    ->Args({16, 60, 16, 8, 2})
-    ->Args({16, 60, 96, 8, 2})
-    ->Unit(benchmark::kMillisecond)
+    // In L2 (a 16 x 60 x 96 input is 368 KB): the register kernel and the ring fills
+    // without the wait on memory, on both ISAs.
+    ->ArgsProduct({{16}, {60}, {16, 96}, {8}, {1, 2}})
+    // Microseconds: the in-L2 shapes take 9-110 us. With --benchmark_repetitions=N also
+    // the fastest repetition, the figure other tenants of a shared host move least.
+    ->ComputeStatistics("min",
+                        [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); })
+    ->Unit(benchmark::kMicrosecond)
     ->UseRealTime()
     ->MinTime(0.5);
 
