@@ -4,10 +4,10 @@
 // pixel) for both, so Winograd's figure is an effective rate and may exceed the peak.
 #include <benchmark/benchmark.h>
 
-#include <random>
 #include <vector>
 
 #include "bench/peak.h"
+#include "bench/random_data.h"
 #include "nn/conv2d.h"
 #include "nn/isa.h"
 #include "nn/threads.h"
@@ -30,12 +30,10 @@ void BM_Conv3x3(benchmark::State& state) {
   nn::Conv2dParams p;
   p.cin = cin, p.cout = cout, p.kh = p.kw = 3, p.pad_h = p.pad_w = 1;
   const nn::Shape in{1, h, w, cin}, out{1, h, w, cout};
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  std::vector<float> x(in.count()), wt(static_cast<std::size_t>(cout) * cin * 9), b(cout), y(out.count());
-  for (auto& v : x) v = dist(gen);
-  for (auto& v : wt) v = dist(gen) * 0.05f;
-  for (auto& v : b) v = dist(gen);
+  nnbench::UniformStream u;
+  const std::vector<float> x = u.vector(in.count()), wt = u.vector(static_cast<std::size_t>(cout) * cin * 9, 0.05f),
+                           b = u.vector(cout);
+  std::vector<float> y(out.count());
   const bool saved = nn::winograd_enabled();
   nn::set_winograd(winograd);
   const nn::Conv2dWeights packed = nn::Conv2dWeights::pack(wt.data(), b.data(), p);

@@ -13,10 +13,10 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <random>
 #include <vector>
 
 #include "bench/peak.h"
+#include "bench/random_data.h"
 #include "nn/buffer.h"
 #include "nn/dwconv.h"
 #include "nn/gemm.h"
@@ -41,27 +41,21 @@ void BM_ConvNeXtBand(benchmark::State& state) {
   }
   nn::set_isa(isa);
   nn::set_num_threads(1);
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  auto seeded = [&](std::size_t n, float scale) {
-    std::vector<float> v(n);
-    for (float& x : v) x = dist(gen) * scale;
-    return v;
-  };
+  nnbench::UniformStream u;
   nn::DwConvParams dp;
   dp.kh = dp.kw = 7;
   dp.pad_h = dp.pad_w = 3;
-  const std::vector<float> dw_w = seeded(static_cast<std::size_t>(c) * 49, 0.2f), dw_b = seeded(c, 1.0f);
+  const std::vector<float> dw_w = u.vector(static_cast<std::size_t>(c) * 49, 0.2f), dw_b = u.vector(c, 1.0f);
   const nn::DwConvWeights dw = nn::DwConvWeights::pack(dw_w.data(), dw_b.data(), c, dp);
-  const std::vector<float> w1 = seeded(4 * static_cast<std::size_t>(c) * c, 0.1f), b1 = seeded(4 * c, 1.0f);
-  const std::vector<float> w2 = seeded(4 * static_cast<std::size_t>(c) * c, 0.1f), b2 = seeded(c, 1.0f);
-  const std::vector<float> scale = seeded(c, 1.0f);
+  const std::vector<float> w1 = u.vector(4 * static_cast<std::size_t>(c) * c, 0.1f), b1 = u.vector(4 * c, 1.0f);
+  const std::vector<float> w2 = u.vector(4 * static_cast<std::size_t>(c) * c, 0.1f), b2 = u.vector(c, 1.0f);
+  const std::vector<float> scale = u.vector(c, 1.0f);
   const nn::GemmWeights pw1 = nn::GemmWeights::pack(w1.data(), 4 * c, c);
   const nn::GemmWeights pw2 = nn::GemmWeights::pack(w2.data(), c, 4 * c);
 
   const nn::Shape shape{1, h, w, c};
   const std::size_t m = static_cast<std::size_t>(h) * w;
-  const std::vector<float> x = seeded(m * c, 1.0f);
+  const std::vector<float> x = u.vector(m * c, 1.0f);
   nn::AlignedBuffer out(m * c), band(static_cast<std::size_t>(kBand) * w * c);
   nn::AlignedBuffer ln(static_cast<std::size_t>(kTile) * c), hid(static_cast<std::size_t>(kTile) * 4 * c);
   nn::AlignedBuffer tile_res(static_cast<std::size_t>(kTile) * c), tile_out(static_cast<std::size_t>(kTile) * c);

@@ -4,10 +4,10 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <random>
 #include <vector>
 
 #include "bench/peak.h"
+#include "bench/random_data.h"
 #include "nn/dwconv.h"
 #include "nn/isa.h"
 #include "nn/threads.h"
@@ -23,13 +23,9 @@ struct RandomDwLayer {
 
 RandomDwLayer random_dw_layer(int h, int w, int c, const nn::DwConvParams& p) {
   RandomDwLayer l{nn::Shape{1, h, w, c}, {}, {}};
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  std::vector<float> wt(static_cast<std::size_t>(c) * p.kh * p.kw), b(c);
-  l.x.resize(l.in.count());
-  for (auto& v : l.x) v = dist(gen);
-  for (auto& v : wt) v = dist(gen);
-  for (auto& v : b) v = dist(gen);
+  nnbench::UniformStream u;
+  l.x = u.vector(l.in.count());
+  const std::vector<float> wt = u.vector(static_cast<std::size_t>(c) * p.kh * p.kw), b = u.vector(c);
   l.packed = nn::DwConvWeights::pack(wt.data(), b.data(), c, p);
   return l;
 }

@@ -3,10 +3,10 @@
 // FLOPs count 8 per element (mean 1, squared deviations 3, normalise-scale-shift 4).
 #include <benchmark/benchmark.h>
 
-#include <random>
 #include <vector>
 
 #include "bench/peak.h"
+#include "bench/random_data.h"
 #include "nn/isa.h"
 #include "nn/layernorm.h"
 #include "nn/threads.h"
@@ -24,12 +24,9 @@ void BM_LayerNorm(benchmark::State& state) {
   }
   nn::set_isa(isa);
   nn::set_num_threads(threads);
-  std::mt19937 gen(1);
-  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
-  std::vector<float> x(rows * c), y(rows * c), g(c), b(c);
-  for (auto& v : x) v = dist(gen);
-  for (auto& v : g) v = 1.0f + 0.1f * dist(gen);
-  for (auto& v : b) v = 0.1f * dist(gen);
+  nnbench::UniformStream u;
+  const std::vector<float> x = u.vector(rows * c), g = u.vector(c, 0.1f, 1.0f), b = u.vector(c, 0.1f);
+  std::vector<float> y(rows * c);
   nn::layernorm_parallel(rows, c, x.data(), c, y.data(), c, g.data(), b.data(), 1e-6f);
   for (auto _ : state) {
     nn::layernorm_parallel(rows, c, x.data(), c, y.data(), c, g.data(), b.data(), 1e-6f);
