@@ -2,7 +2,7 @@
 // vectors at a time, then one, then the last count % lanes elements through a zeroed
 // lanes-float copy, so a tail element gets the bits it would get inside a full vector and
 // nothing past the end is read or written. ActOps is the ISA's: V, kLanes, loadu, storeu and
-// act<Act>(V) from its vector math (nn/arch/*/vecmath_*.h, shared with the GEMM epilogues).
+// act<Act>(V) from its vector math: MathOps* of nn/arch/*/vecmath_*.h, shared with the GEMM epilogues.
 // In an anonymous namespace: each ISA file compiles its own copy with its own flags.
 #pragma once
 

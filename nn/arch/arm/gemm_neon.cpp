@@ -9,14 +9,14 @@
 // 24 + 4 + 3 = 31 registers) and each group re-reads the four W rows (from L1). Every
 // accumulator still sees its K steps in increasing order. K % 4 trailing steps take A one
 // float at a time (fmla by element 0). Row tails are separate instantiations (R < MR);
-// column tails are handled in the store phase (the padded panel columns are zero).
+// column tails are handled in the store phase (the padded panel columns are zero). The
+// frame around the K loop (row dispatch, start, epilogue) is nn/gemm_tile_frame.h.
 #include <arm_neon.h>
 
 #include <cstddef>
-#include <cstring>
 
-#include "nn/gemm_kernels.h"
 #include "nn/arch/arm/vecmath_neon.h"
+#include "nn/gemm_kernels.h"
 
 // GCC's pre-allocation scheduler hoists the loads of later K steps and row groups ahead
 // of the FMAs; with 31 of 32 q registers in use that spills accumulators inside the K
@@ -24,6 +24,10 @@
 // 132). Without it the loop is the fmla, the loads and the loop control
 // (docs/PERFORMANCE.md); the out-of-order core does the scheduling.
 #pragma GCC optimize("no-schedule-insns")
+
+// After the pragma, so that the frame's functions get the same options as the K loop they
+// are inlined into (as when they were written in this file).
+#include "nn/gemm_tile_frame.h"
 
 namespace nn {
 namespace {
@@ -39,51 +43,6 @@ namespace {
 constexpr int row_group(int r, int nv) {
   const int g = nv <= 3 ? 4 : 2;
   return g > r ? r : g;
-}
-
-// Lanes [0, valid) of p (valid 1..3), zeros above: nothing past p + valid is read.
-inline float32x4_t load_partial(const float* p, int valid) {
-  float tmp[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-  std::memcpy(tmp, p, static_cast<std::size_t>(valid) * sizeof(float));
-  return vld1q_f32(tmp);
-}
-
-inline void store_partial(float* p, float32x4_t x, int valid) {
-  float tmp[4];
-  vst1q_f32(tmp, x);
-  std::memcpy(p, tmp, static_cast<std::size_t>(valid) * sizeof(float));
-}
-
-// The epilogue of nn/gemm.h on R rows of raw sums (tile, row stride NR): bias, act, scale,
-// residual (read just before the same element of C is written, so it may alias C), act.
-// Out of line, as in nn/arch/x86/gemm_avx2.cpp: it keeps the epilogue's registers out of
-// the K loop's allocation.
-template <Act ACT, int R, int NR>
-__attribute__((noinline)) void store_epilogue(const float* tile, const GemmTile& t) {
-  const GemmTileEpilogue& ep = *t.ep;
-  for (int r = 0; r < R; ++r) {
-    float* c = t.c + r * t.ldc;
-    const float* res = ep.residual ? ep.residual + r * ep.ldr : nullptr;
-    for (int v = 0; v * 4 < t.nr; ++v) {
-      const int valid = t.nr - 4 * v;
-      float32x4_t x = vld1q_f32(tile + r * NR + 4 * v);
-      if (valid >= 4) {
-        if (ep.bias) x = vaddq_f32(x, vld1q_f32(ep.bias + 4 * v));
-        if (!ep.act_after_residual) x = vq_act<ACT>(x);
-        if (ep.scale) x = vmulq_f32(x, vld1q_f32(ep.scale + 4 * v));
-        if (res) x = vaddq_f32(x, vld1q_f32(res + 4 * v));
-        if (ep.act_after_residual) x = vq_act<ACT>(x);
-        vst1q_f32(c + 4 * v, x);
-      } else {
-        if (ep.bias) x = vaddq_f32(x, load_partial(ep.bias + 4 * v, valid));
-        if (!ep.act_after_residual) x = vq_act<ACT>(x);
-        if (ep.scale) x = vmulq_f32(x, load_partial(ep.scale + 4 * v, valid));
-        if (res) x = vaddq_f32(x, load_partial(res + 4 * v, valid));
-        if (ep.act_after_residual) x = vq_act<ACT>(x);
-        store_partial(c + 4 * v, x, valid);
-      }
-    }
-  }
 }
 
 // K step S of four (lane S of the rows' A vectors) for rows [G0, G0 + GN).
@@ -121,16 +80,8 @@ __attribute__((always_inline)) inline void four_steps(float32x4_t (&acc)[R][NV],
 template <int R, int NV>
 void tile_kernel(const GemmTile& t) {
   constexpr int NR = 4 * NV;
-  // Every loop over acc is unrolled completely (NN_UNROLL): GCC keeps acc[][] in registers
-  // only when all its indices are constants.
   float32x4_t acc[R][NV];
-  if (t.acc) {
-    NN_UNROLL for (int r = 0; r < R; ++r)
-      NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = vld1q_f32(t.acc + r * t.ld_acc + 4 * v);
-  } else {
-    NN_UNROLL for (int r = 0; r < R; ++r)
-      NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = vdupq_n_f32(0.0f);
-  }
+  gemm_load_acc<MathOpsNeon>(acc, t);
   const float* arow[R];
   NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
   const float* w = t.w;
@@ -162,29 +113,13 @@ void tile_kernel(const GemmTile& t) {
       NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = vfmaq_n_f32(acc[r][v], wv[v], a);
     }
   }
-  if (!t.ep) {
-    NN_UNROLL for (int r = 0; r < R; ++r)
-      NN_UNROLL for (int v = 0; v < NV; ++v) vst1q_f32(t.c + r * t.ldc + 4 * v, acc[r][v]);
-    return;
-  }
-  alignas(16) float tile[R * NR];
-  NN_UNROLL for (int r = 0; r < R; ++r)
-    NN_UNROLL for (int v = 0; v < NV; ++v) vst1q_f32(tile + r * NR + 4 * v, acc[r][v]);
-  switch (static_cast<Act>(t.ep->act)) {
-    case Act::None: return store_epilogue<Act::None, R, NR>(tile, t);
-    case Act::Relu: return store_epilogue<Act::Relu, R, NR>(tile, t);
-    case Act::Gelu: return store_epilogue<Act::Gelu, R, NR>(tile, t);
-    case Act::HardSwish: return store_epilogue<Act::HardSwish, R, NR>(tile, t);
-    case Act::HardSigmoid: return store_epilogue<Act::HardSigmoid, R, NR>(tile, t);
-    case Act::Sigmoid: return store_epilogue<Act::Sigmoid, R, NR>(tile, t);
-  }
+  gemm_store_acc<MathOpsNeon>(acc, t);
 }
 
-template <int R, int NV>
-void dispatch_rows(const GemmTile& t) {
-  if (t.mr == R) return tile_kernel<R, NV>(t);
-  if constexpr (R > 1) dispatch_rows<R - 1, NV>(t);
-}
+struct Tile {
+  template <int R, int NV>
+  static void run(const GemmTile& t) { tile_kernel<R, NV>(t); }
+};
 
 }  // namespace
 
@@ -192,7 +127,7 @@ void dispatch_rows(const GemmTile& t) {
 
 #define NN_GEMM_DEFINE_Neon(fn, mr, nr) \
   static_assert((nr) % 4 == 0, #fn ": NR must be a multiple of 4"); \
-  void fn(const GemmTile& tile) { dispatch_rows<mr, (nr) / 4>(tile); }
+  void fn(const GemmTile& tile) { gemm_dispatch_rows<Tile, mr, (nr) / 4>(tile); }
 #define NN_GEMM_DEFINE_Avx2(fn, mr, nr)
 #define NN_GEMM_DEFINE_Avx512(fn, mr, nr)
 #define NN_GEMM_DEFINE_Scalar(fn, mr, nr)

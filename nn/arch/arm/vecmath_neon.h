@@ -13,6 +13,8 @@
 #include <cstdint>
 
 #include "nn/act.h"
+#include "nn/arch/arm/vecops_neon.h"
+#include "nn/vecmath_act.h"
 
 namespace nn {
 namespace {
@@ -96,38 +98,21 @@ inline float32x4_t vq_gelu(float32x4_t x) {
   return vmulq_f32(x, phi);
 }
 
-inline float32x4_t vq_sigmoid(float32x4_t x) {
-  const float32x4_t e = vq_exp(vnegq_f32(x));
-  return vdivq_f32(vdupq_n_f32(1.0f), vaddq_f32(vdupq_n_f32(1.0f), e));
-}
-
 // x < 0 ? 0 : x, like torch.relu: keeps NaN and -0.
 inline float32x4_t vq_relu(float32x4_t x) {
   return vreinterpretq_f32_u32(vbicq_u32(vreinterpretq_u32_f32(x), vcltzq_f32(x)));
 }
 
-inline float32x4_t vq_relu6_shift3(float32x4_t x) {
-  const float32x4_t t = vmaxq_f32(vdupq_n_f32(0.0f), vaddq_f32(x, vdupq_n_f32(3.0f)));
-  return vminq_f32(vdupq_n_f32(6.0f), t);
-}
-
-inline float32x4_t vq_hardsigmoid(float32x4_t x) {
-  return vdivq_f32(vq_relu6_shift3(x), vdupq_n_f32(6.0f));
-}
-
-inline float32x4_t vq_hardswish(float32x4_t x) {
-  return vdivq_f32(vmulq_f32(x, vq_relu6_shift3(x)), vdupq_n_f32(6.0f));
-}
-
-template <Act ACT>
-inline float32x4_t vq_act(float32x4_t x) {
-  if constexpr (ACT == Act::Relu) return vq_relu(x);
-  else if constexpr (ACT == Act::Gelu) return vq_gelu(x);
-  else if constexpr (ACT == Act::HardSwish) return vq_hardswish(x);
-  else if constexpr (ACT == Act::HardSigmoid) return vq_hardsigmoid(x);
-  else if constexpr (ACT == Act::Sigmoid) return vq_sigmoid(x);
-  else return x;
-}
+// The NEON vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// written once over a vector type that apply an activation (nn/vecmath_act.h builds the
+// others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
+struct MathOpsNeon : VecOpsNeon {
+  static V exp(V x) { return vq_exp(x); }
+  static V gelu(V x) { return vq_gelu(x); }
+  static V relu(V x) { return vq_relu(x); }
+  template <Act ACT>
+  static V act(V x) { return vec_act<MathOpsNeon, ACT>(x); }
+};
 
 }  // namespace
 }  // namespace nn

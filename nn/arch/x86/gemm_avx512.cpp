@@ -20,7 +20,7 @@ struct Tile {
     // Every loop over acc is unrolled completely (NN_UNROLL): GCC keeps acc[][] in registers
     // only when all its indices are constants.
     __m512 acc[R][NV];
-    load_tile(acc, t);
+    gemm_load_acc<MathOpsAvx512>(acc, t);
     const float* arow[R];
     NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
     const float* w = t.w;
@@ -46,7 +46,7 @@ struct Tile {
 
 #define NN_GEMM_DEFINE_Avx512(fn, mr, nr) \
   static_assert((nr) % 16 == 0, #fn ": NR must be a multiple of 16"); \
-  void fn(const GemmTile& tile) { dispatch_rows<Tile, mr, (nr) / 16>(tile); }
+  void fn(const GemmTile& tile) { gemm_dispatch_rows<Tile, mr, (nr) / 16>(tile); }
 #define NN_GEMM_DEFINE_Avx2(fn, mr, nr)
 #define NN_GEMM_DEFINE_Scalar(fn, mr, nr)
 #define NN_GEMM_DEFINE(fn, isa, mr, nr) NN_GEMM_DEFINE_##isa(fn, mr, nr)

@@ -17,7 +17,7 @@ struct Tile {
   static void run(const GemmTile& t) {
     constexpr int NR = 16 * NV;
     __m512 acc[R][NV];  // all loops unrolled: acc stays in registers (see gemm_avx512.cpp)
-    load_tile(acc, t);
+    gemm_load_acc<MathOpsAvx512>(acc, t);
     const char* arow[R];
     _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r)
       arow[r] = reinterpret_cast<const char*>(t.a + r * t.lda);
@@ -45,7 +45,7 @@ struct Tile {
 }  // namespace
 
 void gemm_bf16_8x48_avx512bf16(const GemmTile& tile) {
-  dispatch_rows<Tile, kGemmBf16Mr, kGemmBf16Nr / 16>(tile);
+  gemm_dispatch_rows<Tile, kGemmBf16Mr, kGemmBf16Nr / 16>(tile);
 }
 
 void convert_to_bf16_avx512bf16(int rows, int cols, const float* src, std::ptrdiff_t lds,

@@ -1,11 +1,13 @@
-// The frame of an AVX-512 micro-kernel tile: the dispatch on its row count, loading the
-// accumulators and the float epilogue of nn/gemm.h applied straight from them, shared by the float GEMM and
-// the bf16 GEMM (so both finish every element with the same instructions). Include only from AVX-512 ISA files (cmake/isa.cmake): every
-// helper here is internal to the including file.
+// The end of an AVX-512 micro-kernel tile: the float epilogue of nn/gemm.h applied straight
+// from the accumulators (32 zmm registers leave room for it), shared by the float GEMM and
+// the bf16 GEMM, so both finish every element with the same instructions; the rest of the
+// frame (row dispatch, the accumulators' start) is nn/gemm_tile_frame.h. Include only from
+// AVX-512 ISA files (cmake/isa.cmake): every helper here is internal to the including file.
 #pragma once
 
-#include "nn/gemm_kernels.h"
 #include "nn/arch/x86/vecmath_avx512.h"  // first: it includes <immintrin.h> with GCC 12's false warning silenced
+#include "nn/gemm_kernels.h"
+#include "nn/gemm_tile_frame.h"
 
 namespace nn {
 namespace {
@@ -34,21 +36,13 @@ __attribute__((always_inline)) inline void store_epilogue(__m512 (&acc)[R][NV],
     _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v) {
       __m512 x = acc[r][v];
       if (ep.bias) x = _mm512_add_ps(x, bias[v]);
-      if (!ep.act_after_residual) x = v512_act<ACT>(x);
+      if (!ep.act_after_residual) x = MathOpsAvx512::act<ACT>(x);
       if (ep.scale) x = _mm512_mul_ps(x, scale[v]);
       if (res) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(m[v], res + 16 * v));
-      if (ep.act_after_residual) x = v512_act<ACT>(x);
+      if (ep.act_after_residual) x = MathOpsAvx512::act<ACT>(x);
       _mm512_mask_storeu_ps(c + 16 * v, m[v], x);
     }
   }
-}
-
-// A tile's start: zero, or the partial sums of the previous K blocks.
-template <int R, int NV>
-__attribute__((always_inline)) inline void load_tile(__m512 (&acc)[R][NV], const GemmTile& t) {
-  _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r)
-    _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v)
-      acc[r][v] = t.acc ? _mm512_load_ps(t.acc + r * t.ld_acc + 16 * v) : _mm512_setzero_ps();
 }
 
 // A tile's end: raw partial sums (no epilogue: an intermediate K block) or the epilogue
@@ -69,14 +63,6 @@ __attribute__((always_inline)) inline void store_tile(__m512 (&acc)[R][NV], cons
     case Act::HardSigmoid: return store_epilogue<Act::HardSigmoid>(acc, t);
     case Act::Sigmoid: return store_epilogue<Act::Sigmoid>(acc, t);
   }
-}
-
-// Runs Kernel::run<R, NV>(t) for the tile's row count R = t.mr (1..MR): the row tails are
-// their own instantiations, so every accumulator index stays a constant.
-template <class Kernel, int R, int NV>
-void dispatch_rows(const GemmTile& t) {
-  if (t.mr == R) return Kernel::template run<R, NV>(t);
-  if constexpr (R > 1) dispatch_rows<Kernel, R - 1, NV>(t);
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 #pragma GCC diagnostic pop
 
 #include "nn/act.h"
+#include "nn/arch/x86/vecops_avx2.h"
+#include "nn/vecmath_act.h"
 
 namespace nn {
 namespace {
@@ -84,35 +86,17 @@ inline __m256 v256_gelu(__m256 x) {
   return _mm256_mul_ps(x, phi);
 }
 
-inline __m256 v256_sigmoid(__m256 x) {
-  const __m256 e = v256_exp(_mm256_sub_ps(_mm256_setzero_ps(), x));
-  return _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_add_ps(_mm256_set1_ps(1.0f), e));
-}
-
-inline __m256 v256_relu(__m256 x) { return _mm256_max_ps(_mm256_setzero_ps(), x); }
-
-inline __m256 v256_relu6_shift3(__m256 x) {
-  const __m256 t = _mm256_max_ps(_mm256_setzero_ps(), _mm256_add_ps(x, _mm256_set1_ps(3.0f)));
-  return _mm256_min_ps(_mm256_set1_ps(6.0f), t);
-}
-
-inline __m256 v256_hardsigmoid(__m256 x) {
-  return _mm256_div_ps(v256_relu6_shift3(x), _mm256_set1_ps(6.0f));
-}
-
-inline __m256 v256_hardswish(__m256 x) {
-  return _mm256_div_ps(_mm256_mul_ps(x, v256_relu6_shift3(x)), _mm256_set1_ps(6.0f));
-}
-
-template <Act ACT>
-inline __m256 v256_act(__m256 x) {
-  if constexpr (ACT == Act::Relu) return v256_relu(x);
-  else if constexpr (ACT == Act::Gelu) return v256_gelu(x);
-  else if constexpr (ACT == Act::HardSwish) return v256_hardswish(x);
-  else if constexpr (ACT == Act::HardSigmoid) return v256_hardsigmoid(x);
-  else if constexpr (ACT == Act::Sigmoid) return v256_sigmoid(x);
-  else return x;
-}
+// The AVX2 vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// written once over a vector type that apply an activation (nn/vecmath_act.h builds the
+// others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
+struct MathOpsAvx2 : VecOpsAvx2 {
+  static V exp(V x) { return v256_exp(x); }
+  static V gelu(V x) { return v256_gelu(x); }
+  // max with the input as second operand: NaN propagates, as in PyTorch.
+  static V relu(V x) { return max(zero(), x); }
+  template <Act ACT>
+  static V act(V x) { return vec_act<MathOpsAvx2, ACT>(x); }
+};
 
 }  // namespace
 }  // namespace nn

@@ -17,6 +17,8 @@
 #pragma GCC diagnostic pop
 
 #include "nn/act.h"
+#include "nn/arch/x86/vecops_avx512.h"
+#include "nn/vecmath_act.h"
 
 namespace nn {
 namespace {
@@ -107,37 +109,17 @@ inline __m512 v512_gelu(__m512 x) {
   return _mm512_mul_ps(x, phi);
 }
 
-inline __m512 v512_sigmoid(__m512 x) {
-  const __m512 e = v512_exp(_mm512_sub_ps(_mm512_setzero_ps(), x));
-  return _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_add_ps(_mm512_set1_ps(1.0f), e));
-}
-
-// max/min with the input as second operand: NaN propagates, as in PyTorch.
-inline __m512 v512_relu(__m512 x) { return _mm512_max_ps(_mm512_setzero_ps(), x); }
-
-inline __m512 v512_relu6_shift3(__m512 x) {
-  const __m512 t = _mm512_max_ps(_mm512_setzero_ps(), _mm512_add_ps(x, _mm512_set1_ps(3.0f)));
-  return _mm512_min_ps(_mm512_set1_ps(6.0f), t);
-}
-
-// PyTorch divides by 6 (not a multiply by 1/6); so do we, for the same rounding.
-inline __m512 v512_hardsigmoid(__m512 x) {
-  return _mm512_div_ps(v512_relu6_shift3(x), _mm512_set1_ps(6.0f));
-}
-
-inline __m512 v512_hardswish(__m512 x) {
-  return _mm512_div_ps(_mm512_mul_ps(x, v512_relu6_shift3(x)), _mm512_set1_ps(6.0f));
-}
-
-template <Act ACT>
-inline __m512 v512_act(__m512 x) {
-  if constexpr (ACT == Act::Relu) return v512_relu(x);
-  else if constexpr (ACT == Act::Gelu) return v512_gelu(x);
-  else if constexpr (ACT == Act::HardSwish) return v512_hardswish(x);
-  else if constexpr (ACT == Act::HardSigmoid) return v512_hardsigmoid(x);
-  else if constexpr (ACT == Act::Sigmoid) return v512_sigmoid(x);
-  else return x;
-}
+// The AVX-512 vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// written once over a vector type that apply an activation (nn/vecmath_act.h builds the
+// others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
+struct MathOpsAvx512 : VecOpsAvx512 {
+  static V exp(V x) { return v512_exp(x); }
+  static V gelu(V x) { return v512_gelu(x); }
+  // max with the input as second operand: NaN propagates, as in PyTorch.
+  static V relu(V x) { return max(zero(), x); }
+  template <Act ACT>
+  static V act(V x) { return vec_act<MathOpsAvx512, ACT>(x); }
+};
 
 }  // namespace
 }  // namespace nn
