@@ -19,34 +19,6 @@
 namespace nn {
 namespace {
 
-// See nn/arch/x86/vecmath_avx512.h for the fits.
-constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
-                kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
-constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;
-
-inline float32x4_t vq_exp(float32x4_t x) {
-  x = vminq_f32(vdupq_n_f32(100.0f), x);
-  x = vmaxq_f32(vdupq_n_f32(-100.0f), x);
-  const float32x4_t n = vrndnq_f32(vmulq_f32(x, vdupq_n_f32(kLog2e)));  // ties to even
-  // vfmsq_f32(a, b, c) = a - b * c with one rounding: AVX2's fnmadd(b, c, a).
-  float32x4_t r = vfmsq_f32(x, n, vdupq_n_f32(kLn2Hi));
-  r = vfmsq_f32(r, n, vdupq_n_f32(kLn2Lo));
-  // vfmaq_f32(c, a, b) = a * b + c with one rounding: AVX2's fmadd(a, b, c).
-  float32x4_t p = vfmaq_f32(vdupq_n_f32(kExpP3), vdupq_n_f32(kExpP4), r);
-  p = vfmaq_f32(vdupq_n_f32(kExpP2), p, r);
-  p = vfmaq_f32(vdupq_n_f32(kExpP1), p, r);
-  p = vfmaq_f32(vdupq_n_f32(kExpP0), p, r);
-  p = vfmaq_f32(vdupq_n_f32(1.0f), p, r);
-  p = vfmaq_f32(vdupq_n_f32(1.0f), p, r);
-  // 2^n from the exponent field; n clamped to [-127, 128] gives the bit patterns of 0 and
-  // inf at the ends (underflow to zero, overflow to infinity). nc is integral, so the
-  // truncating conversion is exact.
-  const float32x4_t nc =
-      vminq_f32(vmaxq_f32(n, vdupq_n_f32(-127.0f)), vdupq_n_f32(128.0f));
-  const int32x4_t bits = vshlq_n_s32(vaddq_s32(vcvtq_s32_f32(nc), vdupq_n_s32(127)), 23);
-  return vmulq_f32(p, vreinterpretq_f32_s32(bits));
-}
-
 // h(a) = Phi(-a) on [0, 6): 8 intervals of width 3/4, a degree-6 polynomial in
 // u = a * 4/3 - 0.5 - i per interval i: the table of nn/arch/x86/vecmath_avx2.h.
 alignas(16) constexpr float kGeluTable8[7][8] = {
@@ -103,11 +75,19 @@ inline float32x4_t vq_relu(float32x4_t x) {
   return vreinterpretq_f32_u32(vbicq_u32(vreinterpretq_u32_f32(x), vcltzq_f32(x)));
 }
 
-// The NEON vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// The NEON vector ops with this file's GELU, ReLU and exp steps: the trait of the kernels
 // written once over a vector type that apply an activation (nn/vecmath_act.h builds the
 // others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
 struct MathOpsNeon : VecOpsNeon {
-  static V exp(V x) { return vq_exp(x); }
+  // exp (nn/vecmath_act.h), as on AVX2: 2^n from the exponent field, n clamped to
+  // [-127, 128] (underflow to zero, overflow to infinity). nc is integral, so the
+  // truncating conversion is exact.
+  static constexpr float kExpClamp = 100.0f;
+  static V times_pow2(V p, V n) {
+    const float32x4_t nc = vminq_f32(vmaxq_f32(n, vdupq_n_f32(-127.0f)), vdupq_n_f32(128.0f));
+    const int32x4_t bits = vshlq_n_s32(vaddq_s32(vcvtq_s32_f32(nc), vdupq_n_s32(127)), 23);
+    return vmulq_f32(p, vreinterpretq_f32_s32(bits));
+  }
   static V gelu(V x) { return vq_gelu(x); }
   static V relu(V x) { return vq_relu(x); }
   template <Act ACT>

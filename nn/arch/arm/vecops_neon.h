@@ -45,6 +45,8 @@ struct VecOpsNeon {
   static V mul(V a, V b) { return vmulq_f32(a, b); }
   static V div(V a, V b) { return vdivq_f32(a, b); }
   static V fma(V a, V b, V c) { return vfmaq_f32(c, a, b); }  // a * b + c, one rounding
+  static V fnma(V a, V b, V c) { return vfmsq_f32(c, a, b); }  // c - a * b, one rounding
+  static V round_nearest(V a) { return vrndnq_f32(a); }  // to the nearest integer, ties to even
   // fmax/fmin return NaN when either operand is NaN, so NaN propagates as in torch.
   static V max(V a, V b) { return vmaxq_f32(a, b); }
   static V min(V a, V b) { return vminq_f32(a, b); }

@@ -19,35 +19,6 @@
 namespace nn {
 namespace {
 
-// See nn/arch/x86/vecmath_avx512.h for the fits.
-constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
-                kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
-constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;
-
-inline __m256 v256_exp(__m256 x) {
-  // |x| <= 100 keeps inf - inf out of the reduction; min/max return their second
-  // operand on NaN, so NaN passes.
-  x = _mm256_min_ps(_mm256_set1_ps(100.0f), x);
-  x = _mm256_max_ps(_mm256_set1_ps(-100.0f), x);
-  const __m256 n = _mm256_round_ps(_mm256_mul_ps(x, _mm256_set1_ps(kLog2e)),
-                                   _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
-  __m256 r = _mm256_fnmadd_ps(n, _mm256_set1_ps(kLn2Hi), x);
-  r = _mm256_fnmadd_ps(n, _mm256_set1_ps(kLn2Lo), r);
-  __m256 p = _mm256_fmadd_ps(_mm256_set1_ps(kExpP4), r, _mm256_set1_ps(kExpP3));
-  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP2));
-  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP1));
-  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExpP0));
-  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
-  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.0f));
-  // 2^n from the exponent field; n clamped to [-127, 128] gives the bit patterns of 0
-  // and inf at the ends, i.e. underflow to zero and overflow to infinity.
-  const __m256 nc =
-      _mm256_min_ps(_mm256_max_ps(n, _mm256_set1_ps(-127.0f)), _mm256_set1_ps(128.0f));
-  const __m256i bits = _mm256_slli_epi32(
-      _mm256_add_epi32(_mm256_cvtps_epi32(nc), _mm256_set1_epi32(127)), 23);
-  return _mm256_mul_ps(p, _mm256_castsi256_ps(bits));
-}
-
 // h(a) = Phi(-a) on [0, 6): 8 intervals of width 3/4, a degree-6 polynomial in
 // u = a * 4/3 - 0.5 - i per interval i (weighted GELU error a * |dh| <= 1.6e-8).
 alignas(32) constexpr float kGeluTable8[7][8] = {
@@ -86,11 +57,20 @@ inline __m256 v256_gelu(__m256 x) {
   return _mm256_mul_ps(x, phi);
 }
 
-// The AVX2 vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// The AVX2 vector ops with this file's GELU, ReLU and exp steps: the trait of the kernels
 // written once over a vector type that apply an activation (nn/vecmath_act.h builds the
 // others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
 struct MathOpsAvx2 : VecOpsAvx2 {
-  static V exp(V x) { return v256_exp(x); }
+  // exp (nn/vecmath_act.h): 2^n built in the exponent field. n clamped to [-127, 128]
+  // gives the bit patterns of 0 and inf at the ends (underflow to zero, overflow to
+  // infinity).
+  static constexpr float kExpClamp = 100.0f;
+  static V times_pow2(V p, V n) {
+    const __m256 nc = min(max(n, set1(-127.0f)), set1(128.0f));
+    const __m256i bits =
+        _mm256_slli_epi32(_mm256_add_epi32(_mm256_cvtps_epi32(nc), _mm256_set1_epi32(127)), 23);
+    return mul(p, _mm256_castsi256_ps(bits));
+  }
   static V gelu(V x) { return v256_gelu(x); }
   // max with the input as second operand: NaN propagates, as in PyTorch.
   static V relu(V x) { return max(zero(), x); }

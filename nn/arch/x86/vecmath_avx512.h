@@ -23,31 +23,6 @@
 namespace nn {
 namespace {
 
-// exp(r) = 1 + r + r^2 * P(r) on |r| <= ln2/2: weighted-minimax fit in double (relative
-// error 4.4e-9 with these float coefficients), highest degree first.
-constexpr float kExpP4 = 0.00138144684f, kExpP3 = 0.00836878084f, kExpP2 = 0.0416683927f,
-                kExpP1 = 0.166665196f, kExpP0 = 0.49999994f;
-// ln 2 split so that n * kLn2Hi is exact for |n| < 512.
-constexpr float kLn2Hi = 0.693115234f, kLn2Lo = 3.19461833e-05f, kLog2e = 1.44269502f;
-
-inline __m512 v512_exp(__m512 x) {
-  // Clamping keeps inf - inf out of the reduction; scalef still overflows to inf and
-  // underflows to zero. min/max return their second operand on NaN, so NaN passes.
-  x = _mm512_min_ps(_mm512_set1_ps(150.0f), x);
-  x = _mm512_max_ps(_mm512_set1_ps(-150.0f), x);
-  const __m512 n = _mm512_roundscale_ps(_mm512_mul_ps(x, _mm512_set1_ps(kLog2e)),
-                                        _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
-  __m512 r = _mm512_fnmadd_ps(n, _mm512_set1_ps(kLn2Hi), x);
-  r = _mm512_fnmadd_ps(n, _mm512_set1_ps(kLn2Lo), r);
-  __m512 p = _mm512_fmadd_ps(_mm512_set1_ps(kExpP4), r, _mm512_set1_ps(kExpP3));
-  p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(kExpP2));
-  p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(kExpP1));
-  p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(kExpP0));
-  p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(1.0f));
-  p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(1.0f));
-  return _mm512_scalef_ps(p, n);
-}
-
 // h(a) = Phi(-a) = erfc(a / sqrt 2) / 2 on [0, 6): 32 intervals of width 3/16, a cubic in
 // u = a * 16/3 - 0.5 - i (u in [-0.5, 0.5]) per interval i, fitted by weighted minimax of
 // the GELU error a * |dh| (max 1.9e-7 with these float coefficients) in double against
@@ -109,11 +84,14 @@ inline __m512 v512_gelu(__m512 x) {
   return _mm512_mul_ps(x, phi);
 }
 
-// The AVX-512 vector ops with this file's exp, GELU and ReLU: the trait of the kernels
+// The AVX-512 vector ops with this file's GELU, ReLU and exp steps: the trait of the kernels
 // written once over a vector type that apply an activation (nn/vecmath_act.h builds the
 // others from these; nn/activation_loop.h, nn/gemm_tile_frame.h).
 struct MathOpsAvx512 : VecOpsAvx512 {
-  static V exp(V x) { return v512_exp(x); }
+  // exp (nn/vecmath_act.h): scalef gives 2^n with overflow to inf and underflow to zero
+  // for any n, so the clamp only keeps inf - inf out of the reduction.
+  static constexpr float kExpClamp = 150.0f;
+  static V times_pow2(V p, V n) { return _mm512_scalef_ps(p, n); }
   static V gelu(V x) { return v512_gelu(x); }
   // max with the input as second operand: NaN propagates, as in PyTorch.
   static V relu(V x) { return max(zero(), x); }

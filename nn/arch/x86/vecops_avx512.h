@@ -37,6 +37,11 @@ struct VecOpsAvx512 {
   static V mul(V a, V b) { return _mm512_mul_ps(a, b); }
   static V div(V a, V b) { return _mm512_div_ps(a, b); }
   static V fma(V a, V b, V c) { return _mm512_fmadd_ps(a, b, c); }  // a * b + c, one rounding
+  static V fnma(V a, V b, V c) { return _mm512_fnmadd_ps(a, b, c); }  // c - a * b, one rounding
+  // To the nearest integer, ties to even.
+  static V round_nearest(V a) {
+    return _mm512_roundscale_ps(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+  }
   // a never NaN: maxps/minps return their second operand on NaN, so NaN in b propagates
   // as in torch.
   static V max(V a, V b) { return _mm512_max_ps(a, b); }
