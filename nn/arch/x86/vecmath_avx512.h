@@ -5,7 +5,8 @@
 //   gelu: within 1e-6 absolute of x * Phi(x) everywhere (at most 1.9e-7 from the
 //         approximation, the rest is float rounding); NaN in -> NaN out; gelu(-inf) = NaN,
 //         like PyTorch.
-//   exp / sigmoid: about 1 ulp relative / 1e-7 absolute.
+//   exp / sigmoid (nn/vecmath_act.h, with the steps of MathOpsAvx512 below): about 1 ulp
+//         relative / 1e-7 absolute.
 #pragma once
 
 // GCC 12 reports the _mm512_undefined_ps() inside its own intrinsics as "may be used
