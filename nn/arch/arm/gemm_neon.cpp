@@ -77,48 +77,46 @@ __attribute__((always_inline)) inline void four_steps(float32x4_t (&acc)[R][NV],
   if constexpr (G0 + GN < R) four_steps<G0 + GN>(acc, arow, k, wk);
 }
 
-template <int R, int NV>
-void tile_kernel(const GemmTile& t) {
-  constexpr int NR = 4 * NV;
-  float32x4_t acc[R][NV];
-  gemm_load_acc<MathOpsNeon>(acc, t);
-  const float* arow[R];
-  NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
-  const float* w = t.w;
-  const char* pf = reinterpret_cast<const char*>(t.pf);
-  const int pf_lines = t.pf_lines;
-  const int kc = t.kc;  // a local: the barrier in four_steps would make GCC re-read t.kc
-  int k = 0;
-  for (; k + 4 <= kc; k += 4) {
-    // One L2 prefetch (prfm pldl2keep) per K step, as on x86; one test for all four.
-    if (k + 4 <= pf_lines) {
-      const char* p = pf + 64 * k;
-      __builtin_prefetch(p, 0, 2);
-      __builtin_prefetch(p + 64, 0, 2);
-      __builtin_prefetch(p + 128, 0, 2);
-      __builtin_prefetch(p + 192, 0, 2);
-    } else {
-      for (int s = k; s < pf_lines; ++s) __builtin_prefetch(pf + 64 * s, 0, 2);
-    }
-    four_steps<0>(acc, arow, k, w);
-    w += 4 * NR;
-  }
-  for (; k < kc; ++k) {
-    if (k < pf_lines) __builtin_prefetch(pf + 64 * k, 0, 2);
-    float32x4_t wv[NV];
-    NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = vld1q_f32(w + 4 * v);
-    w += NR;
-    NN_UNROLL for (int r = 0; r < R; ++r) {
-      const float a = arow[r][k];
-      NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = vfmaq_n_f32(acc[r][v], wv[v], a);
-    }
-  }
-  gemm_store_acc<MathOpsNeon>(acc, t);
-}
-
+// One tile: R rows of A against NV q-register columns of the panel (see the top).
 struct Tile {
   template <int R, int NV>
-  static void run(const GemmTile& t) { tile_kernel<R, NV>(t); }
+  static void run(const GemmTile& t) {
+    constexpr int NR = 4 * NV;
+    float32x4_t acc[R][NV];
+    gemm_load_acc<MathOpsNeon>(acc, t);
+    const float* arow[R];
+    NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
+    const float* w = t.w;
+    const char* pf = reinterpret_cast<const char*>(t.pf);
+    const int pf_lines = t.pf_lines;
+    const int kc = t.kc;  // a local: the barrier in four_steps would make GCC re-read t.kc
+    int k = 0;
+    for (; k + 4 <= kc; k += 4) {
+      // One L2 prefetch (prfm pldl2keep) per K step, as on x86; one test for all four.
+      if (k + 4 <= pf_lines) {
+        const char* p = pf + 64 * k;
+        __builtin_prefetch(p, 0, 2);
+        __builtin_prefetch(p + 64, 0, 2);
+        __builtin_prefetch(p + 128, 0, 2);
+        __builtin_prefetch(p + 192, 0, 2);
+      } else {
+        for (int s = k; s < pf_lines; ++s) __builtin_prefetch(pf + 64 * s, 0, 2);
+      }
+      four_steps<0>(acc, arow, k, w);
+      w += 4 * NR;
+    }
+    for (; k < kc; ++k) {
+      if (k < pf_lines) __builtin_prefetch(pf + 64 * k, 0, 2);
+      float32x4_t wv[NV];
+      NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = vld1q_f32(w + 4 * v);
+      w += NR;
+      NN_UNROLL for (int r = 0; r < R; ++r) {
+        const float a = arow[r][k];
+        NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = vfmaq_n_f32(acc[r][v], wv[v], a);
+      }
+    }
+    gemm_store_acc<MathOpsNeon>(acc, t);
+  }
 };
 
 }  // namespace

@@ -14,32 +14,30 @@ namespace {
 
 #define NN_UNROLL _Pragma("GCC unroll 16")
 
-template <int R, int NV>
-void tile_kernel(const GemmTile& t) {
-  constexpr int NR = 8 * NV;
-  __m256 acc[R][NV];
-  gemm_load_acc<MathOpsAvx2>(acc, t);
-  const float* arow[R];
-  NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
-  const float* w = t.w;
-  const char* pf = reinterpret_cast<const char*>(t.pf);
-  const int pf_lines = t.pf_lines;
-  for (int k = 0; k < t.kc; ++k) {
-    if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
-    __m256 wv[NV];
-    NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = _mm256_load_ps(w + 8 * v);
-    w += NR;
-    NN_UNROLL for (int r = 0; r < R; ++r) {
-      const __m256 b = _mm256_broadcast_ss(arow[r] + k);
-      NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = _mm256_fmadd_ps(b, wv[v], acc[r][v]);
-    }
-  }
-  gemm_store_acc<MathOpsAvx2>(acc, t);
-}
-
+// One tile: R rows of A against NV ymm columns of the panel (see the top).
 struct Tile {
   template <int R, int NV>
-  static void run(const GemmTile& t) { tile_kernel<R, NV>(t); }
+  static void run(const GemmTile& t) {
+    constexpr int NR = 8 * NV;
+    __m256 acc[R][NV];
+    gemm_load_acc<MathOpsAvx2>(acc, t);
+    const float* arow[R];
+    NN_UNROLL for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
+    const float* w = t.w;
+    const char* pf = reinterpret_cast<const char*>(t.pf);
+    const int pf_lines = t.pf_lines;
+    for (int k = 0; k < t.kc; ++k) {
+      if (k < pf_lines) _mm_prefetch(pf + 64 * k, _MM_HINT_T1);
+      __m256 wv[NV];
+      NN_UNROLL for (int v = 0; v < NV; ++v) wv[v] = _mm256_load_ps(w + 8 * v);
+      w += NR;
+      NN_UNROLL for (int r = 0; r < R; ++r) {
+        const __m256 b = _mm256_broadcast_ss(arow[r] + k);
+        NN_UNROLL for (int v = 0; v < NV; ++v) acc[r][v] = _mm256_fmadd_ps(b, wv[v], acc[r][v]);
+      }
+    }
+    gemm_store_acc<MathOpsAvx2>(acc, t);
+  }
 };
 
 }  // namespace
