@@ -38,6 +38,32 @@ __attribute__((always_inline)) inline void gemm_load_acc(typename Ops::V (&acc)[
   }
 }
 
+// The broadcast K loop of the x86 kernels (the NEON kernels read A four K steps at a time,
+// nn/arch/arm/gemm_neon.cpp): per k, the NV panel vectors of W row k, then per row of A one
+// broadcast and NV FMAs, so every accumulator sees its K steps in increasing order; one L2
+// prefetch (prefetcht1) per k of the next panel's first pf_lines lines.
+template <class Ops, int R, int NV>
+__attribute__((always_inline)) inline void gemm_broadcast_k_loop(typename Ops::V (&acc)[R][NV],
+                                                                 const GemmTile& t) {
+  using V = typename Ops::V;
+  constexpr int L = Ops::kLanes, NR = L * NV;
+  const float* arow[R];
+  _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r) arow[r] = t.a + r * t.lda;
+  const float* w = t.w;
+  const char* pf = reinterpret_cast<const char*>(t.pf);
+  const int pf_lines = t.pf_lines;
+  for (int k = 0; k < t.kc; ++k) {
+    if (k < pf_lines) __builtin_prefetch(pf + 64 * k, 0, 2);
+    V wv[NV];
+    _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v) wv[v] = Ops::load(w + L * v);
+    w += NR;
+    _Pragma("GCC unroll 16") for (int r = 0; r < R; ++r) {
+      const V b = Ops::broadcast(arow[r] + k);
+      _Pragma("GCC unroll 16") for (int v = 0; v < NV; ++v) acc[r][v] = Ops::fma(b, wv[v], acc[r][v]);
+    }
+  }
+}
+
 // The epilogue of nn/gemm.h on R rows of raw sums (tile, row stride NR): bias, act, scale,
 // residual (read just before the same element of C is written, so it may alias C), act.
 // Column tails through the ISA's partial loads and stores: nothing past column nr is read

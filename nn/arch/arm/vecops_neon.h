@@ -21,6 +21,7 @@ struct VecOpsNeon {
   static V set1(float x) { return vdupq_n_f32(x); }
   static V load(const float* p) { return vld1q_f32(p); }
   static V loadu(const float* p) { return vld1q_f32(p); }
+  static V broadcast(const float* p) { return vld1q_dup_f32(p); }  // *p in every lane
   static void store(float* p, V v) { vst1q_f32(p, v); }
   static void storeu(float* p, V v) { vst1q_f32(p, v); }
   static Mask mask(int n) { return n; }

@@ -19,6 +19,7 @@ struct VecOpsAvx2 {
   static V set1(float x) { return _mm256_set1_ps(x); }
   static V load(const float* p) { return _mm256_load_ps(p); }  // 32-byte aligned
   static V loadu(const float* p) { return _mm256_loadu_ps(p); }
+  static V broadcast(const float* p) { return _mm256_broadcast_ss(p); }  // *p in every lane
   static void store(float* p, V v) { _mm256_store_ps(p, v); }  // 32-byte aligned
   static void storeu(float* p, V v) { _mm256_storeu_ps(p, v); }
   static Mask mask(int n) {

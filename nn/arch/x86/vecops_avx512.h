@@ -25,6 +25,7 @@ struct VecOpsAvx512 {
   static V set1(float x) { return _mm512_set1_ps(x); }
   static V load(const float* p) { return _mm512_load_ps(p); }  // 64-byte aligned
   static V loadu(const float* p) { return _mm512_loadu_ps(p); }
+  static V broadcast(const float* p) { return _mm512_set1_ps(*p); }  // *p in every lane
   static void store(float* p, V v) { _mm512_store_ps(p, v); }  // 64-byte aligned
   static void storeu(float* p, V v) { _mm512_storeu_ps(p, v); }
   static Mask mask(int n) { return static_cast<__mmask16>((1u << n) - 1u); }
