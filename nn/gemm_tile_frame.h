@@ -1,10 +1,10 @@
-// The frame around a float GEMM micro-kernel's K loop (contract: nn/gemm_kernels.h),
-// written once over a per-ISA "math ops" trait Ops (MathOpsAvx2, MathOpsAvx512, MathOpsNeon
-// of nn/arch/*/vecmath_*.h: the VecOps of that ISA plus act<Act>(V) from its vector math): the dispatch on the tile's row count, the
-// accumulators' start and the tile's end with the epilogue of nn/gemm.h. The K loops
-// stay hand-written per ISA (their register use was tuned on the compiled code). The
-// AVX-512 kernels, whose 32 registers leave room to apply the epilogue straight from the
-// accumulators, use the dispatch and the start, with their own end
+// A float GEMM micro-kernel (contract: nn/gemm_kernels.h) written once over a per-ISA
+// "math ops" trait Ops (MathOpsAvx2, MathOpsAvx512, MathOpsNeon of nn/arch/*/vecmath_*.h:
+// the VecOps of that ISA plus act<Act>(V) from its vector math): the dispatch on the
+// tile's row count, the accumulators' start, the x86 K loop, and the tile's end with the
+// epilogue of nn/gemm.h. The NEON K loop stays in nn/arch/arm/gemm_neon.cpp (A read four
+// K steps at a time, tuned on the compiled code). The AVX-512 kernels, whose 32 registers
+// leave room to apply the epilogue straight from the accumulators, have their own end
 // (nn/arch/x86/gemm_epilogue_avx512.h).
 // In an anonymous namespace: each ISA file compiles its own copy with its own flags.
 #pragma once
