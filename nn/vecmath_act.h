@@ -72,6 +72,8 @@ inline typename M::V vec_gelu_table8(typename M::V x) {
   using V = typename M::V;
   const V a = M::abs(x);
   V t = M::fma(a, M::set1(8.0f / 6.0f), M::set1(-0.5f));
+  // t first: a NaN t may become 7.49999952 (AVX2's minps) or stay NaN (NEON); x * phi is
+  // NaN either way.
   t = M::min(t, M::set1(7.49999952f));
   const V magic = M::set1(12582912.0f);
   const V rounded = M::add(t, magic);

@@ -1,7 +1,8 @@
 // The NEON "vector ops" of the kernels written once over a vector type
 // (nn/dwconv_block.h, nn/layernorm_rows.h, nn/resize_row.h): 4 floats per q register.
 // Advanced SIMD is baseline on aarch64, so no flags are needed. The same interface as
-// nn/arch/x86/vecops_avx2.h and nn/arch/x86/vecops_avx512.h.
+// nn/arch/x86/vecops_avx2.h and nn/arch/x86/vecops_avx512.h, less broadcast, which only
+// the x86 GEMM K loop uses (the NEON one multiplies by a scalar lane, vfmaq_n_f32).
 #pragma once
 
 #include <arm_neon.h>
@@ -21,7 +22,6 @@ struct VecOpsNeon {
   static V set1(float x) { return vdupq_n_f32(x); }
   static V load(const float* p) { return vld1q_f32(p); }
   static V loadu(const float* p) { return vld1q_f32(p); }
-  static V broadcast(const float* p) { return vld1q_dup_f32(p); }  // *p in every lane
   static void store(float* p, V v) { vst1q_f32(p, v); }
   static void storeu(float* p, V v) { vst1q_f32(p, v); }
   static Mask mask(int n) { return n; }
