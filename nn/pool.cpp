@@ -119,28 +119,35 @@ void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
   const Shape& s = in.shape;
   // Channels in slices of kSlice; the pixels of an image in kParts fixed ranges summed
   // in parallel, then the partial sums in range order: the bits do not depend on the
-  // thread count, and all of the team works however few channels there are.
-  constexpr int kSlice = 256, kParts = 8;
+  // thread count, and all of the team works however few channels there are. Up to
+  // kGroup slices (1024 channels: every SE block of MobileNetV3) share one parallel
+  // region, a task per (slice, range): each region is a barrier, and on a loaded host a
+  // barrier can wait for a thread the scheduler has put off the CPU.
+  constexpr int kSlice = 256, kParts = 8, kGroup = 4;
   const long long pixels = static_cast<long long>(s.h) * s.w;
   for (int n = 0; n < s.n; ++n)
-    for (int c0 = 0; c0 < s.c; c0 += kSlice) {
-      const int cn = s.c - c0 < kSlice ? s.c - c0 : kSlice;
-      double partial[kParts][kSlice];
-      const float* src = in.data + n * pixels * s.c + c0;
-      parallel_for(kParts, pixels * cn > 65536, [&](long long part_) {
-        const int part = static_cast<int>(part_);
-        double* acc = partial[part];
+    for (int g0 = 0; g0 < s.c; g0 += kGroup * kSlice) {
+      const int gc = s.c - g0 < kGroup * kSlice ? s.c - g0 : kGroup * kSlice;
+      const int slices = (gc + kSlice - 1) / kSlice;
+      double partial[kGroup][kParts][kSlice];
+      const float* src = in.data + n * pixels * s.c + g0;
+      parallel_for(static_cast<long long>(slices) * kParts, pixels * gc > 65536, [&](long long task) {
+        const int slice = static_cast<int>(task / kParts), part = static_cast<int>(task % kParts);
+        const int c0 = slice * kSlice;
+        const int cn = gc - c0 < kSlice ? gc - c0 : kSlice;
+        double* acc = partial[slice][part];
         for (int i = 0; i < cn; ++i) acc[i] = 0.0;
         const long long p1 = pixels * (part + 1) / kParts;
         for (long long px = pixels * part / kParts; px < p1; ++px)
-          for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + i];
+          for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + c0 + i];
       });
-      float* dst = out.data + static_cast<std::size_t>(n) * s.c + c0;
-      for (int i = 0; i < cn; ++i) {
-        double sum = 0.0;
-        for (int part = 0; part < kParts; ++part) sum += partial[part][i];
-        dst[i] = static_cast<float>(sum / static_cast<double>(pixels));
-      }
+      float* dst = out.data + static_cast<std::size_t>(n) * s.c + g0;
+      for (int slice = 0; slice < slices; ++slice)
+        for (int i = 0; i < kSlice && slice * kSlice + i < gc; ++i) {
+          double sum = 0.0;
+          for (int part = 0; part < kParts; ++part) sum += partial[slice][part][i];
+          dst[slice * kSlice + i] = static_cast<float>(sum / static_cast<double>(pixels));
+        }
     }
 }
 
