@@ -128,7 +128,7 @@ void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
   for (int n = 0; n < s.n; ++n)
     for (int g0 = 0; g0 < s.c; g0 += kGroup * kSlice) {
       const int gc = s.c - g0 < kGroup * kSlice ? s.c - g0 : kGroup * kSlice;
-      const int slices = (gc + kSlice - 1) / kSlice;
+      const int slices = (gc + kSlice - 1) / kSlice;  // the last one may be partial
       double partial[kGroup][kParts][kSlice];
       const float* src = in.data + n * pixels * s.c + g0;
       parallel_for(static_cast<long long>(slices) * kParts, pixels * gc > 65536, [&](long long task) {
@@ -142,12 +142,11 @@ void global_avg_pool(const ConstTensorView& in, const TensorView& out) {
           for (int i = 0; i < cn; ++i) acc[i] += src[px * s.c + c0 + i];
       });
       float* dst = out.data + static_cast<std::size_t>(n) * s.c + g0;
-      for (int slice = 0; slice < slices; ++slice)
-        for (int i = 0; i < kSlice && slice * kSlice + i < gc; ++i) {
-          double sum = 0.0;
-          for (int part = 0; part < kParts; ++part) sum += partial[slice][part][i];
-          dst[slice * kSlice + i] = static_cast<float>(sum / static_cast<double>(pixels));
-        }
+      for (int i = 0; i < gc; ++i) {
+        double sum = 0.0;
+        for (int part = 0; part < kParts; ++part) sum += partial[i / kSlice][part][i % kSlice];
+        dst[i] = static_cast<float>(sum / static_cast<double>(pixels));
+      }
     }
 }
 
